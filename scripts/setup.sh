@@ -1,0 +1,19 @@
+#!/usr/bin/env bash
+# Installs the system packages antiradiance needs on Debian 12 (idempotent; skips apt when present).
+# Vulkan (lavapipe, loader, validation layers) and Debian's static shaderc are for the GPU passes.
+set -euo pipefail
+pkgs=(mesa-vulkan-drivers libvulkan1 libvulkan-dev vulkan-validationlayers vulkan-tools
+      libshaderc-dev glslang-dev spirv-tools glslc pkg-config)
+missing=()
+for p in "${pkgs[@]}"; do
+  dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  sudo=""; [ "$(id -u)" -ne 0 ] && sudo="sudo"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "${missing[@]}"
+fi
+if ! command -v cargo >/dev/null 2>&1; then
+  echo "setup: cargo not found; install a Rust toolchain >= 1.80 (rustup) and re-run" >&2
+  exit 1
+fi

@@ -1,0 +1,53 @@
+//! Library error type: every failure names the file (and where possible the field) it came from.
+
+use std::path::PathBuf;
+
+/// Errors returned by the antiradiance library.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A file could not be read.
+    #[error("{path}: cannot read file: {source}")]
+    Io {
+        /// File that failed.
+        path: PathBuf,
+        /// Underlying I/O error.
+        source: std::io::Error,
+    },
+    /// The scene description is syntactically or semantically invalid.
+    #[error("{path}: {message}")]
+    Scene {
+        /// Scene (TOML) file.
+        path: PathBuf,
+        /// What is wrong, naming the field.
+        message: String,
+    },
+    /// A mesh (OBJ/MTL) is invalid.
+    #[error("{path}: {message}")]
+    Mesh {
+        /// Mesh file.
+        path: PathBuf,
+        /// What is wrong, naming the face or vertex.
+        message: String,
+    },
+    /// A solver or discretization setting is out of range.
+    #[error("invalid setting `{field}`: {message}")]
+    Setting {
+        /// Setting name as written in the scene's `[solver]` table.
+        field: &'static str,
+        /// What is wrong.
+        message: String,
+    },
+    /// The requested discretization would need more memory than allowed.
+    #[error("{what} needs {needed_bytes} bytes, more than the limit of {limit_bytes} bytes")]
+    TooLarge {
+        /// Which resource.
+        what: String,
+        /// Estimated size.
+        needed_bytes: u64,
+        /// Allowed size.
+        limit_bytes: u64,
+    },
+}
+
+/// Result alias for the library.
+pub type Result<T> = std::result::Result<T, Error>;

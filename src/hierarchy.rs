@@ -1,0 +1,207 @@
+//! Cluster hierarchy over all elements (§3.2, §4.1), stored in depth-first pre-order so that
+//! every subtree is the contiguous row range `[i, end)`: push and pull on the GPU draw one quad or
+//! line per range.
+
+use crate::elements::Element;
+use glam::DVec3;
+
+/// What a node holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NodeKind {
+    /// A leaf: index of its element.
+    Leaf(u32),
+    /// A cluster: its two children (the first is always `self + 1`).
+    Cluster([u32; 2]),
+}
+
+/// One hierarchy node (a row of the intensity tables).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Node {
+    /// Area-weighted centroid of the leaves below.
+    pub center: DVec3,
+    /// Radius of a sphere around `center` enclosing every leaf triangle below.
+    pub radius: f64,
+    /// Total leaf area below.
+    pub area: f64,
+    /// One past the last node of this subtree.
+    pub end: u32,
+    /// Parent node, `u32::MAX` for the root.
+    pub parent: u32,
+    /// Depth (root 0).
+    pub depth: u32,
+    /// Leaf or cluster.
+    pub kind: NodeKind,
+}
+
+/// The element hierarchy.
+#[derive(Debug, Clone)]
+pub struct Hierarchy {
+    /// Nodes in depth-first pre-order; node 0 is the root.
+    pub nodes: Vec<Node>,
+    /// Node index of each element's leaf.
+    pub leaf_of_element: Vec<u32>,
+    /// Node indices of all leaves, in row order.
+    pub leaves: Vec<u32>,
+}
+
+impl Hierarchy {
+    /// Builds a binary tree by median splits along the longest axis of the element centroids.
+    pub fn build(elements: &[Element]) -> Self {
+        assert!(!elements.is_empty(), "hierarchy needs at least one element");
+        let mut h = Hierarchy {
+            nodes: Vec::with_capacity(2 * elements.len()),
+            leaf_of_element: vec![0; elements.len()],
+            leaves: Vec::with_capacity(elements.len()),
+        };
+        let mut idx: Vec<u32> = (0..elements.len() as u32).collect();
+        h.build_rec(elements, &mut idx, u32::MAX, 0);
+        h
+    }
+
+    fn build_rec(&mut self, els: &[Element], idx: &mut [u32], parent: u32, depth: u32) -> u32 {
+        let me = self.nodes.len() as u32;
+        let area: f64 = idx.iter().map(|&i| els[i as usize].area).sum();
+        let center = if area > 0.0 {
+            idx.iter()
+                .map(|&i| els[i as usize].center * els[i as usize].area)
+                .sum::<DVec3>()
+                / area
+        } else {
+            idx.iter().map(|&i| els[i as usize].center).sum::<DVec3>() / idx.len() as f64
+        };
+        let radius = idx
+            .iter()
+            .flat_map(|&i| els[i as usize].corners.iter())
+            .map(|c| (*c - center).length())
+            .fold(0.0, f64::max);
+        self.nodes.push(Node {
+            center,
+            radius,
+            area,
+            end: me + 1,
+            parent,
+            depth,
+            kind: NodeKind::Leaf(0),
+        });
+        if idx.len() == 1 {
+            self.nodes[me as usize].kind = NodeKind::Leaf(idx[0]);
+            self.leaf_of_element[idx[0] as usize] = me;
+            self.leaves.push(me);
+            return me;
+        }
+        let (lo, hi) = idx.iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), &i| {
+                let c = els[i as usize].center;
+                (lo.min(c), hi.max(c))
+            },
+        );
+        let ext = hi - lo;
+        let axis = if ext.x >= ext.y && ext.x >= ext.z {
+            0
+        } else if ext.y >= ext.z {
+            1
+        } else {
+            2
+        };
+        let mid = idx.len() / 2;
+        idx.select_nth_unstable_by(mid, |&a, &b| {
+            els[a as usize].center[axis]
+                .total_cmp(&els[b as usize].center[axis])
+                .then(a.cmp(&b))
+        });
+        let (left, right) = idx.split_at_mut(mid);
+        let l = self.build_rec(els, left, me, depth + 1);
+        let r = self.build_rec(els, right, me, depth + 1);
+        let end = self.nodes.len() as u32;
+        let node = &mut self.nodes[me as usize];
+        node.kind = NodeKind::Cluster([l, r]);
+        node.end = end;
+        me
+    }
+
+    /// Number of nodes (rows).
+    pub fn len(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// True when there are no nodes (never, for a built hierarchy).
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+
+    /// Children of a cluster, `None` for a leaf.
+    pub fn children(&self, n: u32) -> Option<[u32; 2]> {
+        match self.nodes[n as usize].kind {
+            NodeKind::Cluster(c) => Some(c),
+            NodeKind::Leaf(_) => None,
+        }
+    }
+
+    /// Element of a leaf node.
+    pub fn element(&self, n: u32) -> Option<u32> {
+        match self.nodes[n as usize].kind {
+            NodeKind::Leaf(e) => Some(e),
+            NodeKind::Cluster(_) => None,
+        }
+    }
+
+    /// Depth of the tree (longest root-to-leaf path, in edges).
+    pub fn max_depth(&self) -> u32 {
+        self.nodes.iter().map(|n| n.depth).max().unwrap_or(0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::elements::build_elements;
+    use crate::scene::{Material, Scene};
+
+    #[test]
+    fn subtrees_are_contiguous_ranges() {
+        let mut s = Scene::empty();
+        let m = s.add_material(Material::diffuse("w", 0.5));
+        let p = vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
+        s.add_mesh("q", p, vec![[0, 1, 2], [0, 2, 3]], m);
+        s.solver.element_size = 0.2;
+        let els = build_elements(&s).unwrap();
+        let h = Hierarchy::build(&els);
+        assert_eq!(h.leaves.len(), els.len());
+        assert_eq!(h.len(), 2 * els.len() - 1);
+        for (i, n) in h.nodes.iter().enumerate() {
+            // Every node in [i+1, end) has an ancestor chain reaching i; nothing outside does.
+            for j in 0..h.len() {
+                let mut a = j as u32;
+                let mut under = false;
+                while a != u32::MAX {
+                    if a as usize == i {
+                        under = true;
+                        break;
+                    }
+                    a = h.nodes[a as usize].parent;
+                }
+                assert_eq!(under, (i..n.end as usize).contains(&j));
+            }
+            if let NodeKind::Cluster([l, r]) = n.kind {
+                assert_eq!(l as usize, i + 1);
+                assert_eq!(r, h.nodes[l as usize].end);
+                assert_eq!(n.end, h.nodes[r as usize].end);
+                assert!(
+                    (n.area - h.nodes[l as usize].area - h.nodes[r as usize].area).abs() < 1e-12
+                );
+            }
+        }
+        for (e, &leaf) in h.leaf_of_element.iter().enumerate() {
+            assert_eq!(h.element(leaf), Some(e as u32));
+            for c in els[e].corners {
+                let mut a = leaf;
+                while a != u32::MAX {
+                    let n = &h.nodes[a as usize];
+                    assert!((c - n.center).length() <= n.radius + 1e-12);
+                    a = n.parent;
+                }
+            }
+        }
+    }
+}

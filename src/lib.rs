@@ -1,0 +1,26 @@
+//! antiradiance: global illumination with implicit visibility (Dachsbacher, Stamminger,
+//! Drettakis, Durand, SIGGRAPH 2007).
+//!
+//! The rendering equation is rewritten with unoccluded transport **U** and a propagated
+//! antiradiance that cancels light wrongly sent through occluders (eqs. 11–14), solved on a
+//! hierarchy of finite elements with directional bins (§3). See the README for the map from the
+//! paper's equations and passes to modules.
+
+#![warn(missing_docs)]
+
+pub mod bins;
+pub mod brdf;
+pub mod elements;
+pub mod error;
+pub mod filter;
+pub mod hierarchy;
+pub mod info;
+pub mod linker;
+pub mod scene;
+pub mod solver;
+pub mod system;
+
+pub use error::{Error, Result};
+pub use scene::Scene;
+pub use solver::CpuSolver;
+pub use system::System;

@@ -1,0 +1,331 @@
+//! Link construction (§3.2): hierarchical refinement from the root self-link, with the
+//! solid-angle oracle, the solid-object hemisphere rules of Fig. 7, and the form factor of eq. 17.
+//! No visibility is computed: links are unoccluded transport U.
+
+use crate::bins::Bins;
+use crate::elements::Element;
+use crate::filter;
+use crate::hierarchy::{Hierarchy, NodeKind};
+use glam::DVec3;
+use rayon::prelude::*;
+use std::f64::consts::PI;
+use std::time::Instant;
+
+/// One link: the sender's exitant intensity in `sender_bin` arrives at the receiver, spread
+/// around `receiver_bin` by the table of cone class `cone`, scaled by `form_factor`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Link {
+    /// Receiving node (row).
+    pub receiver: u32,
+    /// Sending node (row).
+    pub sender: u32,
+    /// Bin of the travel direction sender→receiver at the sender.
+    pub sender_bin: u16,
+    /// Central bin of the arriving light at the receiver. Bins are indexed by travel direction
+    /// for both exitant and incident quantities (the Arvo convention of §2), so it equals
+    /// `sender_bin`; it is stored separately because the GPU reads them from different tables.
+    pub receiver_bin: u16,
+    /// `1 / (max(r², ρ²) ω_bin)`: eq. 17, bounded as r → 0 by the sender's disc radius ρ
+    /// (a disc of radius ρ cannot deliver more than πL of irradiance).
+    pub form_factor: f64,
+    /// Cone class of the sender's solid angle (0: within one bin, no spreading).
+    pub cone: u8,
+}
+
+/// The link set, sorted by receiver, with a per-receiver index for gathering.
+#[derive(Debug, Clone, Default)]
+pub struct Links {
+    /// Links sorted by (receiver, sender).
+    pub links: Vec<Link>,
+    /// `links[offsets[r]..offsets[r+1]]` are the links into node `r`.
+    pub offsets: Vec<u32>,
+    /// Wall time of linking in milliseconds.
+    pub linking_ms: f64,
+    /// Cone classes used by at least one link.
+    pub used_classes: Vec<bool>,
+}
+
+impl Links {
+    /// Number of links.
+    pub fn len(&self) -> usize {
+        self.links.len()
+    }
+
+    /// True when there are no links.
+    pub fn is_empty(&self) -> bool {
+        self.links.is_empty()
+    }
+
+    /// Links per second achieved while linking.
+    pub fn links_per_second(&self) -> f64 {
+        self.links.len() as f64 / (self.linking_ms / 1e3).max(1e-9)
+    }
+}
+
+/// True when `sender` lies strictly in front of the plane of the leaf `receiver`
+/// (light from it arrives at the receiver's front side).
+pub fn in_front(receiver: &Element, sender: DVec3) -> bool {
+    let d = sender - receiver.center;
+    receiver.normal.dot(d) > 1e-7 * d.length()
+}
+
+struct Ctx<'a> {
+    h: &'a Hierarchy,
+    els: &'a [Element],
+    bins: &'a Bins,
+    limit: f64,
+}
+
+enum Step {
+    Done(Option<Link>),
+    Split(Vec<(u32, u32)>),
+}
+
+impl Ctx<'_> {
+    fn leaf(&self, n: u32) -> Option<&Element> {
+        self.h.element(n).map(|e| &self.els[e as usize])
+    }
+
+    /// One refinement decision for the pair (receiver `r`, sender `s`).
+    fn step(&self, r: u32, s: u32) -> Step {
+        let (nr, ns) = (&self.h.nodes[r as usize], &self.h.nodes[s as usize]);
+        if r == s {
+            // Self-links are always subdivided; a leaf does not light itself.
+            return match self.h.children(r) {
+                None => Step::Done(None),
+                Some([a, b]) => Step::Split(vec![(a, a), (a, b), (b, a), (b, b)]),
+            };
+        }
+        // Fig. 7: a leaf receives only from its front side.
+        if let Some(re) = self.leaf(r) {
+            let behind = match self.leaf(s) {
+                Some(_) => !in_front(re, ns.center),
+                None => re.normal.dot(ns.center - re.center) + ns.radius <= 0.0,
+            };
+            if behind {
+                return Step::Done(None);
+            }
+        }
+        let d = (nr.center - ns.center).length();
+        let big = nr.radius.max(ns.radius);
+        let coarse = d <= nr.radius + ns.radius || PI * big * big > self.limit * d * d;
+        let (rc, sc) = (self.h.children(r), self.h.children(s));
+        if coarse && (rc.is_some() || sc.is_some()) {
+            let split_receiver = match (rc, sc) {
+                (Some(_), Some(_)) => nr.radius >= ns.radius,
+                (Some(_), None) => true,
+                _ => false,
+            };
+            return Step::Split(if split_receiver {
+                rc.unwrap().iter().map(|&c| (c, s)).collect()
+            } else {
+                sc.unwrap().iter().map(|&c| (r, c)).collect()
+            });
+        }
+        Step::Done(Some(self.link(r, s, d)))
+    }
+
+    fn link(&self, r: u32, s: u32, d: f64) -> Link {
+        let (nr, ns) = (&self.h.nodes[r as usize], &self.h.nodes[s as usize]);
+        let rho2 = (ns.area / PI).min(ns.radius * ns.radius);
+        let dir = (nr.center - ns.center) / d;
+        let bin = self.bins.bin_of(dir) as u16;
+        let cone_solid_angle = 2.0 * PI * (1.0 - d / (d * d + rho2).sqrt());
+        Link {
+            receiver: r,
+            sender: s,
+            sender_bin: bin,
+            receiver_bin: bin,
+            form_factor: 1.0 / ((d * d).max(rho2) * self.bins.omega),
+            cone: filter::cone_class(self.bins, cone_solid_angle),
+        }
+    }
+
+    fn refine(&self, r: u32, s: u32, out: &mut Vec<Link>) {
+        match self.step(r, s) {
+            Step::Done(l) => out.extend(l),
+            Step::Split(pairs) => pairs.into_iter().for_each(|(a, b)| self.refine(a, b, out)),
+        }
+    }
+}
+
+/// Builds all links of the scene, in parallel over all cores.
+/// `oracle` is τ: a link is refined while a node subtends more than τ·ω_bin.
+pub fn build_links(h: &Hierarchy, els: &[Element], bins: &Bins, oracle: f64) -> Links {
+    let t0 = Instant::now();
+    let ctx = Ctx {
+        h,
+        els,
+        bins,
+        limit: oracle * bins.omega,
+    };
+    // Expand breadth-first until there is enough independent work for every core.
+    let mut tasks = vec![(0u32, 0u32)];
+    let mut links = Vec::new();
+    let want = 64 * rayon::current_num_threads();
+    while !tasks.is_empty() && tasks.len() < want {
+        let mut next = Vec::with_capacity(tasks.len() * 4);
+        for (r, s) in tasks {
+            match ctx.step(r, s) {
+                Step::Done(l) => links.extend(l),
+                Step::Split(p) => next.extend(p),
+            }
+        }
+        tasks = next;
+    }
+    let rest: Vec<Vec<Link>> = tasks
+        .par_iter()
+        .map(|&(r, s)| {
+            let mut out = Vec::new();
+            ctx.refine(r, s, &mut out);
+            out
+        })
+        .collect();
+    links.extend(rest.into_iter().flatten());
+    links.par_sort_unstable_by_key(|l| (l.receiver, l.sender));
+    let mut offsets = vec![0u32; h.len() + 1];
+    for l in &links {
+        offsets[l.receiver as usize + 1] += 1;
+    }
+    for i in 0..h.len() {
+        offsets[i + 1] += offsets[i];
+    }
+    let mut used_classes = vec![false; filter::class_count(bins)];
+    for l in &links {
+        used_classes[l.cone as usize] = true;
+    }
+    Links {
+        links,
+        offsets,
+        linking_ms: t0.elapsed().as_secs_f64() * 1e3,
+        used_classes,
+    }
+}
+
+/// Smallest |cosine| between a leaf link's bin center and either plane (see [`exact_leaf_form_factors`]).
+const MIN_BIN_COS: f64 = 0.02;
+
+/// A cluster whose area-weighted normals sum to at least this fraction of its area counts as planar.
+const PLANAR_CLUSTER: f64 = 0.95;
+
+/// Projected solid angle `∫ cos θ dω` of triangle `tri` seen from point `p` with normal `n`,
+/// after clipping it to the half-space in front of `p` (Lambert's polygon formula).
+pub fn projected_solid_angle(p: DVec3, n: DVec3, tri: &[DVec3; 3]) -> f64 {
+    // Clip against the plane n·(x - p) >= 0 (Sutherland–Hodgman on a triangle).
+    let mut poly: Vec<DVec3> = Vec::with_capacity(4);
+    for i in 0..3 {
+        let (a, b) = (tri[i] - p, tri[(i + 1) % 3] - p);
+        let (da, db) = (n.dot(a), n.dot(b));
+        if da >= 0.0 {
+            poly.push(a);
+        }
+        if (da >= 0.0) != (db >= 0.0) {
+            poly.push(a + (b - a) * (da / (da - db)));
+        }
+    }
+    if poly.len() < 3 {
+        return 0.0;
+    }
+    let mut sum = 0.0;
+    for i in 0..poly.len() {
+        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+        let c = a.cross(b);
+        let cl = c.length();
+        if cl < 1e-300 {
+            continue;
+        }
+        let theta = cl.atan2(a.dot(b));
+        sum += theta * n.dot(c / cl);
+    }
+    (0.5 * sum).abs()
+}
+
+/// Replaces the form factor of every leaf→leaf link by the one that makes the irradiance it
+/// delivers to the receiver's center exact for a Lambertian sender: the sender triangle's
+/// projected solid angle over what the discrete path (sender bin cosine, spreading, receiver
+/// bin cosines) would deliver per unit radiance. Far links change little; near links (corners,
+/// contact) lose the point-collocation error. Where the bin of the center direction has its
+/// center on the wrong side of either plane (near-grazing pairs), the nearest usable bin is used.
+/// Links with a cluster at either end keep eq. 17, corrected for the receiver cosine the Gaussian
+/// blur loses (≈σ²/2), when the receiver is a leaf or a nearly planar cluster.
+pub fn exact_leaf_form_factors(
+    links: &mut Links,
+    h: &Hierarchy,
+    els: &[Element],
+    bins: &Bins,
+    filters: &crate::filter::FilterTables,
+) {
+    // Area-weighted normal sum per node: a nearly planar cluster receives like one leaf.
+    let mut nsum = vec![DVec3::ZERO; h.len()];
+    for i in (0..h.len()).rev() {
+        nsum[i] = match h.nodes[i].kind {
+            NodeKind::Leaf(e) => els[e as usize].normal * els[e as usize].area,
+            NodeKind::Cluster([a, b]) => nsum[a as usize] + nsum[b as usize],
+        };
+    }
+    links.links.par_iter_mut().for_each(|l| {
+        let normal = match h.element(l.receiver) {
+            Some(e) => els[e as usize].normal,
+            None => {
+                let n = nsum[l.receiver as usize];
+                if n.length() < PLANAR_CLUSTER * h.nodes[l.receiver as usize].area {
+                    return;
+                }
+                n.normalize()
+            }
+        };
+        let cr = |w: DVec3| (-normal.dot(w)).max(0.0);
+        let spread_of = |c: u8, b: usize| -> f64 {
+            filters.row(c, b as u32).map_or(0.0, |row| {
+                row.iter()
+                    .map(|&(j, w)| w as f64 * cr(bins.centers[j as usize]))
+                    .sum()
+            })
+        };
+        let receiver_leaf = h.element(l.receiver).map(|e| &els[e as usize]);
+        let (Some(r), Some(se)) = (receiver_leaf, h.element(l.sender)) else {
+            // Cluster at either end: keep eq. 17 but undo the cosine lost to blurring.
+            let b = l.receiver_bin as usize;
+            let spread = spread_of(l.cone, b);
+            if spread > 0.05 * cr(bins.centers[b]) && cr(bins.centers[b]) > 0.0 {
+                l.form_factor *= cr(bins.centers[b]) / spread;
+            }
+            return;
+        };
+        let s = &els[se as usize];
+        let dir = (r.center - s.center).normalize();
+        let side = s.normal.dot(dir).signum();
+        // A bin is usable when its center leaves the sender on the same side as the true
+        // direction and arrives at the receiver's front; near-grazing pairs may need a neighbour.
+        let usable = |b: usize| {
+            let w = bins.centers[b];
+            s.normal.dot(w) * side >= MIN_BIN_COS && -r.normal.dot(w) >= MIN_BIN_COS
+        };
+        let mut b = l.sender_bin as usize;
+        if !usable(b) {
+            match (0..bins.count).filter(|&k| usable(k)).max_by(|&x, &y| {
+                bins.centers[x]
+                    .dot(dir)
+                    .total_cmp(&bins.centers[y].dot(dir))
+            }) {
+                Some(k) => b = k,
+                None => return,
+            }
+        }
+        let wb = bins.centers[b];
+        let spread = spread_of(l.cone, b);
+        if spread <= 0.0 {
+            return;
+        }
+        let phi = projected_solid_angle(r.center, r.normal, &s.corners);
+        let delivered = bins.omega
+            * bins.cosine_normalization(r.normal)
+            * s.area
+            * bins.cosine_normalization(s.normal)
+            * s.normal.dot(wb).abs()
+            * spread;
+        l.sender_bin = b as u16;
+        l.receiver_bin = b as u16;
+        l.form_factor = phi / delivered;
+    });
+}

@@ -1,0 +1,262 @@
+//! Scenes: triangle meshes with Phong materials, analytic lights, environment, camera and solver
+//! settings. `format` is the TOML on disk, `load` turns it into a validated [`Scene`].
+
+pub mod format;
+pub mod load;
+
+use glam::DVec3;
+use std::path::PathBuf;
+
+pub use load::load_scene;
+
+/// A material: Lambertian `kd` plus a normalized modified-Phong lobe, and optional emission.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Material {
+    /// Name from the MTL file.
+    pub name: String,
+    /// Diffuse albedo per channel.
+    pub kd: DVec3,
+    /// Specular albedo of the lobe `ks·(ns+2)/(2π)·cos^ns(α)`.
+    pub ks: DVec3,
+    /// Phong exponent.
+    pub ns: f64,
+    /// Emitted radiance of the front face.
+    pub ke: DVec3,
+}
+
+impl Material {
+    /// A grey Lambertian material (the default for faces without `usemtl`, as in Mitsuba).
+    pub fn diffuse(name: &str, kd: f64) -> Self {
+        Self {
+            name: name.into(),
+            kd: DVec3::splat(kd),
+            ks: DVec3::ZERO,
+            ns: 0.0,
+            ke: DVec3::ZERO,
+        }
+    }
+
+    /// True when the Phong lobe contributes.
+    pub fn is_glossy(&self) -> bool {
+        self.ks.max_element() > 0.0
+    }
+
+    /// True when the front face emits.
+    pub fn is_emitter(&self) -> bool {
+        self.ke.max_element() > 0.0
+    }
+}
+
+/// A triangle mesh in world space.
+#[derive(Debug, Clone)]
+pub struct Mesh {
+    /// Name (OBJ model name or file stem).
+    pub name: String,
+    /// Source file, for messages.
+    pub source: PathBuf,
+    /// World-space vertex positions.
+    pub positions: Vec<DVec3>,
+    /// Counter-clockwise triangles (front side by the OBJ convention).
+    pub triangles: Vec<[u32; 3]>,
+    /// Index into [`Scene::materials`] per triangle.
+    pub material: Vec<u32>,
+}
+
+/// An analytic light.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Light {
+    /// Parallel light travelling along `direction` with `irradiance` on a facing surface.
+    Directional {
+        /// Unit direction of travel.
+        direction: DVec3,
+        /// W/m² per channel.
+        irradiance: DVec3,
+    },
+    /// Isotropic point light.
+    Point {
+        /// Position.
+        position: DVec3,
+        /// W/sr per channel.
+        intensity: DVec3,
+    },
+    /// Spot light: full intensity within `beam_width`, linear fall-off in angle to zero at `cutoff`.
+    Spot {
+        /// Position.
+        position: DVec3,
+        /// Unit axis direction.
+        axis: DVec3,
+        /// W/sr per channel on the axis.
+        intensity: DVec3,
+        /// Cut-off angle (radians).
+        cutoff: f64,
+        /// Beam width (radians).
+        beam_width: f64,
+    },
+}
+
+impl Light {
+    /// Short type name (`directional`, `point`, `spot`).
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Light::Directional { .. } => "directional",
+            Light::Point { .. } => "point",
+            Light::Spot { .. } => "spot",
+        }
+    }
+}
+
+/// Pinhole camera. Pixel (0,0) is top-left; image right is `forward × up`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Camera {
+    /// Eye position.
+    pub eye: DVec3,
+    /// Point looked at.
+    pub target: DVec3,
+    /// Up vector.
+    pub up: DVec3,
+    /// Vertical field of view in degrees.
+    pub fov_y_deg: f64,
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+}
+
+/// Iteration scheme of §2.2.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Scheme {
+    /// Alternate radiance and antiradiance propagation (eqs. 13 and 14 in lockstep).
+    Symmetric,
+    /// One radiance step, then several antiradiance steps with radiance frozen (provably converges).
+    Asymmetric,
+}
+
+/// Storage precision of the GPU tables.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Precision {
+    /// R16G16B16A16_SFLOAT (the paper's float16).
+    F16,
+    /// R32G32B32A32_SFLOAT.
+    F32,
+}
+
+/// Solver settings (`[solver]`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SolverSettings {
+    /// Directional bins `m`.
+    pub bins: usize,
+    /// Iterations (outer iterations for the asymmetric scheme).
+    pub iterations: usize,
+    /// Iteration scheme.
+    pub scheme: Scheme,
+    /// Longest edge of a leaf element.
+    pub element_size: f64,
+    /// Oracle threshold τ: a link is refined while a node subtends more than τ·ω_bin.
+    pub oracle: f64,
+    /// Antiradiance steps per radiance step (asymmetric scheme).
+    pub antiradiance_steps: usize,
+    /// GPU table precision.
+    pub precision: Precision,
+    /// Refuse scenes with more leaf elements than this.
+    pub max_elements: usize,
+}
+
+impl Default for SolverSettings {
+    fn default() -> Self {
+        Self {
+            bins: 128,
+            iterations: 4,
+            scheme: Scheme::Symmetric,
+            element_size: 0.25,
+            oracle: 1.0,
+            antiradiance_steps: 4,
+            precision: Precision::F16,
+            max_elements: 2_000_000,
+        }
+    }
+}
+
+/// A validated scene.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    /// Scene file, if loaded from one.
+    pub path: Option<PathBuf>,
+    /// Meshes in world space.
+    pub meshes: Vec<Mesh>,
+    /// All materials; meshes index into this.
+    pub materials: Vec<Material>,
+    /// Analytic lights.
+    pub lights: Vec<Light>,
+    /// Constant environment radiance.
+    pub environment: DVec3,
+    /// Camera.
+    pub camera: Camera,
+    /// Solver settings.
+    pub solver: SolverSettings,
+    /// Approximations made while loading (unsupported MTL features), one line each, no repeats.
+    pub warnings: Vec<String>,
+}
+
+impl Scene {
+    /// A scene with no geometry, lights or environment and default camera and settings,
+    /// to be filled programmatically (tests, engines).
+    pub fn empty() -> Self {
+        Self {
+            path: None,
+            meshes: Vec::new(),
+            materials: Vec::new(),
+            lights: Vec::new(),
+            environment: DVec3::ZERO,
+            camera: Camera {
+                eye: DVec3::new(0.0, 1.0, 3.5),
+                target: DVec3::new(0.0, 1.0, 0.0),
+                up: DVec3::Y,
+                fov_y_deg: 40.0,
+                width: 512,
+                height: 512,
+            },
+            solver: SolverSettings::default(),
+            warnings: Vec::new(),
+        }
+    }
+
+    /// Adds a material and returns its index.
+    pub fn add_material(&mut self, m: Material) -> u32 {
+        self.materials.push(m);
+        (self.materials.len() - 1) as u32
+    }
+
+    /// Adds a mesh of counter-clockwise triangles with one material.
+    pub fn add_mesh(
+        &mut self,
+        name: &str,
+        positions: Vec<DVec3>,
+        triangles: Vec<[u32; 3]>,
+        material: u32,
+    ) {
+        let n = triangles.len();
+        self.meshes.push(Mesh {
+            name: name.into(),
+            source: PathBuf::from(format!("<{name}>")),
+            positions,
+            triangles,
+            material: vec![material; n],
+        });
+    }
+
+    /// Total number of input triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.meshes.iter().map(|m| m.triangles.len()).sum()
+    }
+
+    /// Axis-aligned bounds of all vertices.
+    pub fn bounds(&self) -> (DVec3, DVec3) {
+        let mut lo = DVec3::splat(f64::INFINITY);
+        let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        for p in self.meshes.iter().flat_map(|m| m.positions.iter()) {
+            lo = lo.min(*p);
+            hi = hi.max(*p);
+        }
+        (lo, hi)
+    }
+}

@@ -1,0 +1,77 @@
+//! Local pass at the leaves: reflection (eq. 18) into front bins, antiradiance (eq. 19) into
+//! back bins, and the display intensity `I_total`. Light arriving from behind a leaf is ignored:
+//! for solid objects it has passed through the object's own surface, whose antiradiance cancels it.
+
+use super::{CpuSolver, LocalMode};
+use crate::brdf::phong_lobe;
+use glam::DVec3;
+use rayon::prelude::*;
+use std::f64::consts::PI;
+
+/// Runs the local pass over all leaves, updating `i_ex` (per `mode`) and `i_total`.
+pub fn local(s: &mut CpuSolver<'_>, mode: LocalMode) {
+    let sys = s.sys;
+    let m = sys.bins.count;
+    let w = sys.bins.omega;
+    let (l_push, direct, env) = (&s.l_push, s.direct_in.as_ref(), s.environment);
+    s.i_ex
+        .data
+        .par_chunks_mut(m)
+        .zip(s.i_total.data.par_chunks_mut(m))
+        .enumerate()
+        .for_each(|(node, (ex, tot))| {
+            let slot = sys.leaf_slot[node];
+            if slot == u32::MAX {
+                return;
+            }
+            let leaf = &sys.leaves[slot as usize];
+            let mat = &sys.materials[leaf.material as usize];
+            let (n, c, a) = (leaf.normal, leaf.cos_norm, leaf.area);
+            let lp = l_push.row(node);
+            let dr = direct.map(|d| d.row(node));
+            // Incident bins on the front side, with their quadrature weight (−cos)·ω·c.
+            let incoming: Vec<(usize, f64)> = sys
+                .bins
+                .centers
+                .iter()
+                .enumerate()
+                .filter_map(|(l, d)| {
+                    let cos = -d.dot(n);
+                    (cos > 0.0).then_some((l, cos * w * c))
+                })
+                .collect();
+            let lt = |l: usize| lp[l] + env;
+            let ld = |l: usize| dr.map_or(DVec3::ZERO, |d| d[l]);
+            let e_t: DVec3 = incoming.iter().map(|&(l, wt)| lt(l) * wt).sum();
+            let e_d: DVec3 = incoming.iter().map(|&(l, wt)| ld(l) * wt).sum();
+            let glossy = mat.is_glossy();
+            for (j, dir) in sys.bins.centers.iter().enumerate() {
+                let cj = dir.dot(n);
+                if cj > 0.0 {
+                    if mode == LocalMode::Antiradiance {
+                        continue;
+                    }
+                    let base = a * c * cj;
+                    let (mut r_t, mut r_d) = (mat.kd / PI * e_t, mat.kd / PI * e_d);
+                    if glossy {
+                        for &(l, wt) in &incoming {
+                            let f = phong_lobe(mat.ks, mat.ns, n, sys.bins.centers[l], *dir) * wt;
+                            r_t += f * lt(l);
+                            r_d += f * ld(l);
+                        }
+                    }
+                    tot[j] = base * r_t;
+                    ex[j] = base * (r_t + r_d + mat.ke);
+                } else if cj < 0.0 {
+                    if mode == LocalMode::Reflect {
+                        continue;
+                    }
+                    tot[j] = DVec3::ZERO;
+                    ex[j] = -(a * c * -cj) * lt(j);
+                } else {
+                    tot[j] = DVec3::ZERO;
+                    ex[j] = DVec3::ZERO;
+                }
+            }
+        });
+}

@@ -1,0 +1,255 @@
+//! The f64 CPU solver: the specification of the discrete system the GPU passes run.
+//!
+//! One iteration is the four operations of §4.2 in order: [`global`] (eq. 16, the unoccluded
+//! transport U over all links), [`push`] (interior nodes' gathered radiance down to the leaves),
+//! [`local`] (eq. 18 reflection K and eq. 19 antiradiance J at the leaves) and [`pull`] (leaf
+//! intensities summed into every ancestor). `I_ex` holds `I_L` in each leaf's front bins and
+//! `-I_A` in its back bins (Fig. 6a), so one table carries radiance and antiradiance.
+
+pub mod global;
+pub mod local;
+pub mod pull;
+pub mod push;
+
+use crate::scene::Scheme;
+use crate::system::System;
+use glam::DVec3;
+
+/// A table with one row per node and one RGB texel per bin (the layout of §4.1).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Table {
+    /// Bins per row.
+    pub bins: usize,
+    /// Texels, row-major: `data[row * bins + bin]`.
+    pub data: Vec<DVec3>,
+}
+
+impl Table {
+    /// A zero table of `rows × bins`.
+    pub fn zeros(rows: usize, bins: usize) -> Self {
+        Self {
+            bins,
+            data: vec![DVec3::ZERO; rows * bins],
+        }
+    }
+
+    /// One row.
+    pub fn row(&self, r: usize) -> &[DVec3] {
+        &self.data[r * self.bins..(r + 1) * self.bins]
+    }
+
+    /// One row, mutable.
+    pub fn row_mut(&mut self, r: usize) -> &mut [DVec3] {
+        &mut self.data[r * self.bins..(r + 1) * self.bins]
+    }
+
+    /// Number of rows.
+    pub fn rows(&self) -> usize {
+        self.data.len() / self.bins
+    }
+}
+
+/// Which hemisphere a local pass updates (the asymmetric scheme alternates them).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LocalMode {
+    /// Reflection (front bins) and antiradiance (back bins): the symmetric scheme.
+    Both,
+    /// Reflection only, eq. 13 (antiradiance frozen).
+    Reflect,
+    /// Antiradiance only, eq. 14 (radiance frozen).
+    Antiradiance,
+}
+
+/// CPU solver state.
+#[derive(Debug, Clone)]
+pub struct CpuSolver<'a> {
+    /// The discretized scene.
+    pub sys: &'a System,
+    /// Exitant intensity `I_ex = I_L - I_A` per node and bin.
+    pub i_ex: Table,
+    /// Incident radiance gathered by the global pass, per node (before push).
+    pub l_in: Table,
+    /// Incident radiance after push: each row plus all its ancestors' rows.
+    pub l_push: Table,
+    /// Display intensity: front-bin intensity reflected from light arriving through links and
+    /// the environment (emission and the first bounce of direct light are drawn per pixel).
+    pub i_total: Table,
+    /// Incident radiance from direct light (shadow-mapped, reflected but creating no antiradiance).
+    pub direct_in: Option<Table>,
+    /// Constant environment radiance added to every leaf's incident radiance.
+    pub environment: DVec3,
+    /// Relative change of `I_ex` at every iteration.
+    pub residuals: Vec<f64>,
+    /// Total exitant flux (W, mean of channels) of the leaves' front bins after every iteration.
+    pub energies: Vec<f64>,
+    /// Global passes run so far.
+    pub propagations: usize,
+}
+
+impl<'a> CpuSolver<'a> {
+    /// A solver with no light yet; call [`CpuSolver::set_environment`] and/or
+    /// [`CpuSolver::set_direct`] before [`CpuSolver::initialize`].
+    pub fn new(sys: &'a System) -> Self {
+        let (n, m) = (sys.rows(), sys.bins.count);
+        Self {
+            sys,
+            i_ex: Table::zeros(n, m),
+            l_in: Table::zeros(n, m),
+            l_push: Table::zeros(n, m),
+            i_total: Table::zeros(n, m),
+            direct_in: None,
+            environment: DVec3::ZERO,
+            residuals: Vec::new(),
+            energies: Vec::new(),
+            propagations: 0,
+        }
+    }
+
+    /// Sets the constant environment radiance (it creates antiradiance, §3.3).
+    pub fn set_environment(&mut self, radiance: DVec3) {
+        self.environment = radiance;
+    }
+
+    /// Hook for direct light (§3.3): `f(leaf_index, bin)` returns the incident radiance from
+    /// analytic lights in that bin, already shadowed; it is reflected but creates no antiradiance.
+    pub fn set_direct(&mut self, f: impl Fn(usize, usize) -> DVec3) {
+        let mut t = Table::zeros(self.sys.rows(), self.sys.bins.count);
+        for (li, leaf) in self.sys.leaves.iter().enumerate() {
+            for (b, v) in t.row_mut(leaf.node as usize).iter_mut().enumerate() {
+                *v = f(li, b);
+            }
+        }
+        self.direct_in = Some(t);
+    }
+
+    /// Initial state: emission, reflected direct light and environment, antiradiance of the
+    /// environment (a local pass with nothing gathered yet), then pull.
+    pub fn initialize(&mut self) {
+        self.l_in.data.fill(DVec3::ZERO);
+        self.l_push.data.fill(DVec3::ZERO);
+        local::local(self, LocalMode::Both);
+        pull::pull(&self.sys.hierarchy, &mut self.i_ex);
+        self.residuals.clear();
+        self.energies.clear();
+        self.propagations = 0;
+    }
+
+    /// One propagation: global, push, local (in `mode`), pull.
+    pub fn propagate(&mut self, mode: LocalMode) {
+        global::global(self.sys, &self.i_ex, &mut self.l_in);
+        push::push(&self.sys.hierarchy, &self.l_in, &mut self.l_push);
+        local::local(self, mode);
+        pull::pull(&self.sys.hierarchy, &mut self.i_ex);
+        self.propagations += 1;
+    }
+
+    /// One iteration of `scheme`: symmetric = one propagation updating both hemispheres;
+    /// asymmetric = one reflection step then `antiradiance_steps` antiradiance steps (eqs. 13–14).
+    /// Records the residual and energy.
+    pub fn iterate(&mut self, scheme: Scheme, antiradiance_steps: usize) {
+        let before = self.leaf_rows(&self.i_ex);
+        match scheme {
+            Scheme::Symmetric => self.propagate(LocalMode::Both),
+            Scheme::Asymmetric => {
+                self.propagate(LocalMode::Reflect);
+                for _ in 0..antiradiance_steps {
+                    self.propagate(LocalMode::Antiradiance);
+                }
+            }
+        }
+        let after = self.leaf_rows(&self.i_ex);
+        let (mut diff, mut norm) = (0.0, 0.0);
+        for (a, b) in after.iter().zip(&before) {
+            diff += (*a - *b).length_squared();
+            norm += a.length_squared();
+        }
+        self.residuals.push(if norm > 0.0 {
+            (diff / norm).sqrt()
+        } else {
+            diff.sqrt()
+        });
+        self.energies.push(self.exitant_flux());
+    }
+
+    /// Initializes and runs `iterations` iterations of `scheme`.
+    pub fn solve(&mut self, scheme: Scheme, iterations: usize, antiradiance_steps: usize) {
+        self.initialize();
+        for _ in 0..iterations {
+            self.iterate(scheme, antiradiance_steps);
+        }
+    }
+
+    fn leaf_rows(&self, t: &Table) -> Vec<DVec3> {
+        self.sys
+            .leaves
+            .iter()
+            .flat_map(|l| t.row(l.node as usize).iter().copied())
+            .collect()
+    }
+
+    /// Flux leaving all leaves through their front bins (mean of RGB).
+    pub fn exitant_flux(&self) -> f64 {
+        let w = self.sys.bins.omega;
+        self.sys
+            .leaves
+            .iter()
+            .map(|l| {
+                let row = self.i_ex.row(l.node as usize);
+                self.sys
+                    .bins
+                    .centers
+                    .iter()
+                    .zip(row)
+                    .filter(|(c, _)| c.dot(l.normal) > 0.0)
+                    .map(|(_, v)| v.element_sum() / 3.0)
+                    .sum::<f64>()
+                    * w
+            })
+            .sum()
+    }
+
+    /// Irradiance arriving at the front of leaf `li` (index into `sys.leaves`) from links,
+    /// environment and direct light, as the local pass sees it.
+    pub fn irradiance(&self, li: usize) -> DVec3 {
+        let leaf = &self.sys.leaves[li];
+        let n = leaf.node as usize;
+        let mut e = DVec3::ZERO;
+        for (b, c) in self.sys.bins.centers.iter().enumerate() {
+            let cos = -c.dot(leaf.normal);
+            if cos > 0.0 {
+                let mut l = self.l_push.row(n)[b] + self.environment;
+                if let Some(d) = &self.direct_in {
+                    l += d.row(n)[b];
+                }
+                e += l * cos;
+            }
+        }
+        e * self.sys.bins.omega * leaf.cos_norm
+    }
+
+    /// Outgoing radiance of leaf `li` in bin `b` (front bins; zero behind), emission included.
+    pub fn radiance(&self, li: usize, b: usize) -> DVec3 {
+        let leaf = &self.sys.leaves[li];
+        let cos = self.sys.bins.centers[b].dot(leaf.normal);
+        if cos <= 0.0 {
+            return DVec3::ZERO;
+        }
+        self.i_ex.row(leaf.node as usize)[b] / (leaf.area * leaf.cos_norm * cos)
+    }
+
+    /// Radiosity (W/m²) leaving leaf `li`, from its front-bin intensities.
+    pub fn radiosity(&self, li: usize) -> DVec3 {
+        let leaf = &self.sys.leaves[li];
+        let row = self.i_ex.row(leaf.node as usize);
+        let s: DVec3 = self
+            .sys
+            .bins
+            .centers
+            .iter()
+            .zip(row)
+            .filter(|(c, _)| c.dot(leaf.normal) > 0.0)
+            .map(|(_, v)| *v)
+            .sum();
+        s * self.sys.bins.omega / leaf.area
+    }
+}

@@ -1,0 +1,119 @@
+//! The discrete system of one scene: elements, hierarchy, bins, links and spreading tables.
+//! Everything the CPU solver and the GPU passes share is built here, once.
+
+use crate::bins::Bins;
+use crate::elements::{build_elements, Element};
+use crate::error::{Error, Result};
+use crate::filter::FilterTables;
+use crate::hierarchy::Hierarchy;
+use crate::linker::{build_links, Links};
+use crate::scene::{Material, Scene};
+use glam::DVec3;
+use std::time::Instant;
+
+/// Per-leaf constants of the local pass (the GPU stores them as element attribute images).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LeafAttributes {
+    /// Node (row) of the leaf.
+    pub node: u32,
+    /// Element area `a_i`.
+    pub area: f64,
+    /// Unit normal `n_i`.
+    pub normal: DVec3,
+    /// Cosine quadrature normalization (see [`Bins::cosine_normalization`]).
+    pub cos_norm: f64,
+    /// Material index.
+    pub material: u32,
+}
+
+/// Everything built on the CPU before solving.
+#[derive(Debug, Clone)]
+pub struct System {
+    /// Leaf elements.
+    pub elements: Vec<Element>,
+    /// Hierarchy over them.
+    pub hierarchy: Hierarchy,
+    /// Directional bins.
+    pub bins: Bins,
+    /// Links.
+    pub links: Links,
+    /// Spreading tables for the cone classes in use.
+    pub filters: FilterTables,
+    /// Leaf attributes, in the order of `hierarchy.leaves`.
+    pub leaves: Vec<LeafAttributes>,
+    /// For every node, its index in `leaves`, or `u32::MAX` for clusters.
+    pub leaf_slot: Vec<u32>,
+    /// Materials (copied from the scene).
+    pub materials: Vec<Material>,
+    /// Time to build elements and hierarchy, ms.
+    pub meshing_ms: f64,
+}
+
+/// Upper bound on host memory the CPU tables may take.
+pub const CPU_TABLE_LIMIT_BYTES: u64 = 12 << 30;
+
+impl System {
+    /// Discretizes a scene with its `[solver]` settings.
+    pub fn build(scene: &Scene) -> Result<Self> {
+        let t0 = Instant::now();
+        let bins = Bins::new(scene.solver.bins)?;
+        let elements = build_elements(scene)?;
+        if elements.is_empty() {
+            return Err(Error::Setting {
+                field: "element_size",
+                message: "scene has no elements".into(),
+            });
+        }
+        let rows = 2 * elements.len() as u64 - 1;
+        let needed = rows * bins.count as u64 * 24 * 5;
+        if needed > CPU_TABLE_LIMIT_BYTES {
+            return Err(Error::TooLarge {
+                what: format!("CPU tables for {rows} nodes × {} bins", bins.count),
+                needed_bytes: needed,
+                limit_bytes: CPU_TABLE_LIMIT_BYTES,
+            });
+        }
+        let hierarchy = Hierarchy::build(&elements);
+        let meshing_ms = t0.elapsed().as_secs_f64() * 1e3;
+        let mut links = build_links(&hierarchy, &elements, &bins, scene.solver.oracle);
+        let filters = FilterTables::new(&bins, &links.used_classes);
+        let t1 = Instant::now();
+        crate::linker::exact_leaf_form_factors(&mut links, &hierarchy, &elements, &bins, &filters);
+        links.linking_ms += t1.elapsed().as_secs_f64() * 1e3;
+        let leaves = hierarchy
+            .leaves
+            .iter()
+            .map(|&node| {
+                let e = &elements[hierarchy.element(node).unwrap() as usize];
+                LeafAttributes {
+                    node,
+                    area: e.area,
+                    normal: e.normal,
+                    cos_norm: bins.cosine_normalization(e.normal),
+                    material: e.material,
+                }
+            })
+            .collect();
+        let mut leaf_slot = vec![u32::MAX; hierarchy.len()];
+        for (i, &n) in hierarchy.leaves.iter().enumerate() {
+            leaf_slot[n as usize] = i as u32;
+        }
+        let materials = scene.materials.clone();
+        Ok(Self {
+            elements,
+            hierarchy,
+            bins,
+            links,
+            filters,
+            leaves,
+            leaf_slot,
+            materials,
+            meshing_ms,
+        })
+    }
+
+    /// Number of table rows (hierarchy nodes).
+    pub fn rows(&self) -> usize {
+        self.hierarchy.len()
+    }
+}

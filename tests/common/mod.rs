@@ -1,0 +1,58 @@
+//! Generated test scenes shared by the integration tests.
+#![allow(dead_code)]
+
+use antiradiance::scene::{Material, Scene};
+use glam::DVec3;
+
+/// Adds a quad `a b c d` (counter-clockwise seen from its front) as two triangles.
+pub fn quad(s: &mut Scene, name: &str, p: [DVec3; 4], mat: u32) {
+    s.add_mesh(name, p.to_vec(), vec![[0, 1, 2], [0, 2, 3]], mat);
+}
+
+/// Adds an axis-aligned box; `inward` makes its faces look into the box (an enclosure).
+pub fn add_box(s: &mut Scene, name: &str, lo: DVec3, hi: DVec3, mat: u32, inward: bool) {
+    let c = |x: usize, y: usize, z: usize| {
+        DVec3::new(
+            if x == 0 { lo.x } else { hi.x },
+            if y == 0 { lo.y } else { hi.y },
+            if z == 0 { lo.z } else { hi.z },
+        )
+    };
+    // Outward-facing faces, counter-clockwise seen from outside.
+    let faces = [
+        [c(0, 0, 0), c(0, 0, 1), c(0, 1, 1), c(0, 1, 0)], // -x
+        [c(1, 0, 0), c(1, 1, 0), c(1, 1, 1), c(1, 0, 1)], // +x
+        [c(0, 0, 0), c(1, 0, 0), c(1, 0, 1), c(0, 0, 1)], // -y
+        [c(0, 1, 0), c(0, 1, 1), c(1, 1, 1), c(1, 1, 0)], // +y
+        [c(0, 0, 0), c(0, 1, 0), c(1, 1, 0), c(1, 0, 0)], // -z
+        [c(0, 0, 1), c(1, 0, 1), c(1, 1, 1), c(0, 1, 1)], // +z
+    ];
+    for (i, mut f) in faces.into_iter().enumerate() {
+        if inward {
+            f.reverse();
+        }
+        quad(s, &format!("{name}{i}"), f, mat);
+    }
+}
+
+/// A closed unit box of albedo `rho` emitting `le` everywhere, with a floating block inside that
+/// does the same (it occludes the floor from the ceiling).
+pub fn uniform_enclosure(rho: f64, le: f64, bins: usize, element_size: f64) -> Scene {
+    let mut s = Scene::empty();
+    let m = s.add_material(Material {
+        ke: DVec3::splat(le),
+        ..Material::diffuse("uniform", rho)
+    });
+    add_box(&mut s, "room", DVec3::ZERO, DVec3::ONE, m, true);
+    add_box(
+        &mut s,
+        "block",
+        DVec3::new(0.3, 0.2, 0.35),
+        DVec3::new(0.7, 0.5, 0.6),
+        m,
+        false,
+    );
+    s.solver.bins = bins;
+    s.solver.element_size = element_size;
+    s
+}

@@ -1,0 +1,209 @@
+//! Known-answer scenes for the CPU solver: the uniform enclosure and analytic form factors.
+
+mod common;
+
+use antiradiance::scene::{Material, Scene, Scheme};
+use antiradiance::{CpuSolver, System};
+use common::*;
+use glam::DVec3;
+use std::f64::consts::PI;
+
+fn converge(solver: &mut CpuSolver, scheme: Scheme, tol: f64, cap: usize) {
+    solver.initialize();
+    for _ in 0..cap {
+        solver.iterate(scheme, 4);
+        if *solver.residuals.last().unwrap() < tol {
+            return;
+        }
+    }
+    panic!(
+        "no convergence in {cap} iterations: {:?}",
+        solver.residuals.last()
+    );
+}
+
+/// A closed box with an occluder inside, uniform albedo ρ and emission Le: every element's
+/// radiance converges to Le/(1-ρ). Unoccluded transport U sends light through the block; only
+/// antiradiance cancels it, so this fails if antiradiance is wrong.
+#[test]
+fn uniform_enclosure_with_occluder_converges_to_le_over_one_minus_rho() {
+    for scheme in [Scheme::Symmetric, Scheme::Asymmetric] {
+        let (rho, le) = (0.4, 1.0);
+        let mut scene = uniform_enclosure(rho, le, 256, 0.2);
+        // Fine links: with τ = 0.1 every exchange here is leaf to leaf (see linker docs).
+        scene.solver.oracle = 0.1;
+        let sys = System::build(&scene).unwrap();
+        let mut solver = CpuSolver::new(&sys);
+        converge(&mut solver, scheme, 1e-9, 400);
+        let want = le / (1.0 - rho);
+        let mut worst: f64 = 0.0;
+        for li in 0..sys.leaves.len() {
+            let b = solver.radiosity(li) / PI;
+            for ch in b.to_array() {
+                worst = worst.max((ch - want).abs() / want);
+            }
+        }
+        println!(
+            "{scheme:?}: {} elements, {} links, worst relative error {worst:.4}",
+            sys.elements.len(),
+            sys.links.len()
+        );
+        assert!(
+            worst < 0.01,
+            "{scheme:?}: worst element off by {:.2}%",
+            worst * 100.0
+        );
+    }
+}
+
+/// Flux from a unit emitter (radiance 1) into a black receiver after one propagation.
+fn exchanged_flux(emitter: [DVec3; 4], receiver: [DVec3; 4]) -> f64 {
+    let mut s = Scene::empty();
+    let e = s.add_material(Material {
+        ke: DVec3::ONE,
+        ..Material::diffuse("emitter", 0.0)
+    });
+    let r = s.add_material(Material::diffuse("receiver", 0.0));
+    quad(&mut s, "emitter", emitter, e);
+    quad(&mut s, "receiver", receiver, r);
+    s.solver.bins = 256;
+    s.solver.element_size = 0.1;
+    let sys = System::build(&s).unwrap();
+    let mut solver = CpuSolver::new(&sys);
+    solver.initialize();
+    solver.propagate(antiradiance::solver::LocalMode::Both);
+    (0..sys.leaves.len())
+        .filter(|&li| sys.leaves[li].material == r)
+        .map(|li| solver.irradiance(li).x * sys.leaves[li].area)
+        .sum()
+}
+
+#[test]
+fn parallel_unit_squares_exchange_the_analytic_flux() {
+    let v = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+    // Two unit squares facing each other one unit apart: F = 0.19982 (Hottel's crossed strings / tables).
+    let phi = exchanged_flux(
+        [v(0., 0., 0.), v(1., 0., 0.), v(1., 1., 0.), v(0., 1., 0.)],
+        [v(0., 0., 1.), v(0., 1., 1.), v(1., 1., 1.), v(1., 0., 1.)],
+    );
+    let want = PI * 0.199_825;
+    println!("parallel: {phi:.5} vs {want:.5}");
+    assert!(
+        (phi - want).abs() / want < 0.02,
+        "parallel flux {phi} vs {want}"
+    );
+}
+
+#[test]
+fn perpendicular_unit_squares_exchange_the_analytic_flux() {
+    let v = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+    // Unit squares sharing an edge at a right angle: F = 0.200044.
+    let phi = exchanged_flux(
+        [v(0., 0., 0.), v(0., 0., 1.), v(1., 0., 1.), v(1., 0., 0.)],
+        [v(0., 0., 0.), v(0., 1., 0.), v(0., 1., 1.), v(0., 0., 1.)],
+    );
+    let want = PI * 0.200_044;
+    println!("perpendicular: {phi:.5} vs {want:.5}");
+    assert!(
+        (phi - want).abs() / want < 0.02,
+        "perpendicular flux {phi} vs {want}"
+    );
+}
+
+/// The paper reports < 1e-4 between the schemes on its office after 300 iterations.
+#[test]
+fn symmetric_and_asymmetric_schemes_agree_on_the_cornell_box() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.toml");
+    let mut scene = antiradiance::scene::load_scene(&path).unwrap();
+    scene.solver.bins = 64;
+    scene.solver.element_size = 0.5;
+    let sys = System::build(&scene).unwrap();
+    let mut a = CpuSolver::new(&sys);
+    let mut b = CpuSolver::new(&sys);
+    converge(&mut a, Scheme::Symmetric, 1e-12, 500);
+    converge(&mut b, Scheme::Asymmetric, 1e-12, 500);
+    println!(
+        "symmetric {} iterations, asymmetric {}",
+        a.residuals.len(),
+        b.residuals.len()
+    );
+    let max = a
+        .i_total
+        .data
+        .iter()
+        .map(|v| v.max_element())
+        .fold(0.0, f64::max);
+    assert!(max > 0.0);
+    let worst = a
+        .i_total
+        .data
+        .iter()
+        .zip(&b.i_total.data)
+        .map(|(x, y)| (*x - *y).abs().max_element())
+        .fold(0.0, f64::max);
+    assert!(
+        worst / max < 1e-4,
+        "schemes differ by {:.2e} of the maximum",
+        worst / max
+    );
+}
+
+/// Light arriving from behind a leaf is neither reflected nor turned into antiradiance.
+#[test]
+fn local_pass_ignores_light_from_behind() {
+    let v = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+    let mut s = Scene::empty();
+    let e = s.add_material(Material {
+        ke: DVec3::ONE,
+        ..Material::diffuse("emitter", 0.0)
+    });
+    let r = s.add_material(Material::diffuse("receiver", 0.8));
+    quad(
+        &mut s,
+        "emitter",
+        [v(0., 0., 0.), v(1., 0., 0.), v(1., 1., 0.), v(0., 1., 0.)],
+        e,
+    );
+    // Faces +z, away from the emitter below it.
+    quad(
+        &mut s,
+        "receiver",
+        [v(0., 0., 1.), v(1., 0., 1.), v(1., 1., 1.), v(0., 1., 1.)],
+        r,
+    );
+    s.solver.element_size = 0.5;
+    let sys = System::build(&s).unwrap();
+    let mut solver = CpuSolver::new(&sys);
+    // Direct light from behind too: bins travelling along the receiver's normal.
+    solver.set_direct(|li, b| {
+        if sys.bins.centers[b].dot(sys.leaves[li].normal) > 0.0 {
+            DVec3::ONE
+        } else {
+            DVec3::ZERO
+        }
+    });
+    solver.initialize();
+    solver.propagate(antiradiance::solver::LocalMode::Both);
+    let mut behind_in = 0.0;
+    for (li, leaf) in sys.leaves.iter().enumerate() {
+        if leaf.material != r {
+            continue;
+        }
+        behind_in += solver
+            .l_push
+            .row(leaf.node as usize)
+            .iter()
+            .map(|x| x.x)
+            .sum::<f64>();
+        assert!(
+            solver
+                .i_ex
+                .row(leaf.node as usize)
+                .iter()
+                .all(|x| *x == DVec3::ZERO),
+            "leaf {li} reacted to light from behind"
+        );
+        assert_eq!(solver.irradiance(li), DVec3::ZERO);
+    }
+    let _ = behind_in;
+}
