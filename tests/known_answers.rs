@@ -184,7 +184,6 @@ fn local_pass_ignores_light_from_behind() {
     });
     solver.initialize();
     solver.propagate(antiradiance::solver::LocalMode::Both);
-    let mut behind_in = 0.0;
     for (li, leaf) in sys.leaves.iter().enumerate() {
         if leaf.material != r {
             continue;
@@ -205,5 +204,4 @@ fn local_pass_ignores_light_from_behind() {
         );
         assert_eq!(solver.irradiance(li), DVec3::ZERO);
     }
-    let _ = behind_in;
 }
