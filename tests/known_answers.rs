@@ -188,12 +188,6 @@ fn local_pass_ignores_light_from_behind() {
         if leaf.material != r {
             continue;
         }
-        behind_in += solver
-            .l_push
-            .row(leaf.node as usize)
-            .iter()
-            .map(|x| x.x)
-            .sum::<f64>();
         assert!(
             solver
                 .i_ex
