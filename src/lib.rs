@@ -13,6 +13,7 @@ pub mod brdf;
 pub mod elements;
 pub mod error;
 pub mod filter;
+pub mod gpu;
 pub mod hierarchy;
 pub mod info;
 pub mod linker;

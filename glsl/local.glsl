@@ -1,0 +1,90 @@
+// Local pass at the leaves (eqs. 18-19), shared by the diffuse fast path and the general Phong
+// pass. Mirrors src/solver/local.rs: front bins get I_L = a c cos (kd/pi E + glossy + Ke),
+// back bins get -a c |cos| L_t (antiradiance), I_total gets the reflected part without emission
+// and without the first bounce of direct light. The frozen hemisphere of the asymmetric steps is
+// copied from the current I_ex (ping-pong).
+#ifndef ANTIRADIANCE_LOCAL_GLSL
+#define ANTIRADIANCE_LOCAL_GLSL
+#include "common.glsl"
+
+layout(constant_id = 0) const uint AR_MODE = 0u;
+
+layout(binding = AR_BINDING_LEAF_EX) uniform sampler2D leaf_ex;
+layout(binding = AR_BINDING_L_PUSH) uniform sampler2D l_push;
+layout(binding = AR_BINDING_IRRADIANCE_T) uniform sampler2D irradiance_t;
+layout(binding = AR_BINDING_IRRADIANCE_D) uniform sampler2D irradiance_d;
+layout(binding = AR_BINDING_ATTR_NORMAL_AREA) uniform sampler2D attr_normal_area;
+layout(binding = AR_BINDING_ATTR_LEAF) uniform sampler2D attr_leaf;
+layout(binding = AR_BINDING_DIRECT) uniform sampler2D direct;
+layout(std430, binding = AR_BINDING_MATERIALS) readonly buffer Materials { Material materials[]; };
+layout(std430, binding = AR_BINDING_BIN_CENTERS) readonly buffer BinCenters { vec4 centers[]; };
+
+layout(location = 0) out vec4 out_ex;
+layout(location = 1) out vec4 out_total;
+
+// Incident radiance the leaf reflects and turns into antiradiance (links + environment).
+vec3 ar_lt(uint row, uint bin) {
+    return texelFetch(l_push, ar_texel(row, bin), 0).rgb + pc.environment.rgb;
+}
+
+// Incident direct light (reflected only).
+vec3 ar_ld(uint row, uint bin) {
+    return (pc.flags & AR_FLAG_DIRECT) != 0u ? texelFetch(direct, ar_texel(row, bin), 0).rgb : vec3(0.0);
+}
+
+vec3 ar_phong(vec3 ks, float ns, vec3 n, vec3 incident, vec3 outgoing) {
+    vec3 m = incident - 2.0 * dot(incident, n) * n;
+    float c = dot(m, outgoing);
+    return c <= 0.0 ? vec3(0.0) : ks * ((ns + 2.0) / (2.0 * AR_PI) * pow(c, ns));
+}
+
+void ar_local(bool glossy) {
+    ivec2 p = ivec2(gl_FragCoord.xy);
+    uint row = ar_row_at(p);
+    uint j = ar_bin_at(p);
+    vec4 na = texelFetch(attr_normal_area, ar_row_texel(row), 0);
+    vec4 lf = texelFetch(attr_leaf, ar_row_texel(row), 0);
+    vec3 n = na.xyz;
+    float a = na.w;
+    float c = lf.x;
+    Material mat = materials[uint(lf.y)];
+    vec3 dir = centers[j].xyz;
+    float cj = dot(dir, n);
+    vec3 old = texelFetch(leaf_ex, p, 0).rgb;
+    vec3 ex = vec3(0.0);
+    vec3 tot = vec3(0.0);
+    if (cj > 0.0) {
+        if (AR_MODE == AR_MODE_ANTIRADIANCE) {
+            ex = old; // I_total is write-masked in this mode.
+        } else {
+            float base = a * c * cj;
+            vec3 e_t = texelFetch(irradiance_t, ar_row_texel(row), 0).rgb;
+            vec3 e_d = texelFetch(irradiance_d, ar_row_texel(row), 0).rgb;
+            vec3 r_t = mat.kd.rgb / AR_PI * e_t;
+            vec3 r_d = mat.kd.rgb / AR_PI * e_d;
+            if (glossy) {
+                for (uint l = 0u; l < pc.bins; ++l) {
+                    vec3 inc = centers[l].xyz;
+                    float cos_l = -dot(inc, n);
+                    if (cos_l > 0.0) {
+                        vec3 f = ar_phong(mat.ks_ns.rgb, mat.ks_ns.a, n, inc, dir) * (cos_l * pc.omega * c);
+                        r_t += f * ar_lt(row, l);
+                        r_d += f * ar_ld(row, l);
+                    }
+                }
+            }
+            tot = base * r_t;
+            ex = base * (r_t + r_d + mat.ke.rgb);
+        }
+    } else if (cj < 0.0) {
+        if (AR_MODE == AR_MODE_REFLECT) {
+            ex = old;
+        } else {
+            ex = -(a * c * -cj) * ar_lt(row, j);
+        }
+    }
+    out_ex = vec4(ar_store(ex), 0.0);
+    out_total = vec4(ar_store(tot), 0.0);
+}
+
+#endif

@@ -1,0 +1,34 @@
+#version 450
+// Local pass, diffuse fast path, step 1: each leaf's irradiance from links + environment and
+// from direct light, one texel per row of the irradiance images.
+#include "common.glsl"
+
+layout(binding = AR_BINDING_L_PUSH) uniform sampler2D l_push;
+layout(binding = AR_BINDING_ATTR_NORMAL_AREA) uniform sampler2D attr_normal_area;
+layout(binding = AR_BINDING_ATTR_LEAF) uniform sampler2D attr_leaf;
+layout(binding = AR_BINDING_DIRECT) uniform sampler2D direct;
+layout(std430, binding = AR_BINDING_BIN_CENTERS) readonly buffer BinCenters { vec4 centers[]; };
+
+layout(location = 0) out vec4 e_t;
+layout(location = 1) out vec4 e_d;
+
+void main() {
+    uint row = ar_row_at_row_image(ivec2(gl_FragCoord.xy));
+    vec3 n = texelFetch(attr_normal_area, ar_row_texel(row), 0).xyz;
+    float c = texelFetch(attr_leaf, ar_row_texel(row), 0).x;
+    bool has_direct = (pc.flags & AR_FLAG_DIRECT) != 0u;
+    vec3 st = vec3(0.0);
+    vec3 sd = vec3(0.0);
+    for (uint l = 0u; l < pc.bins; ++l) {
+        float cos_l = -dot(centers[l].xyz, n);
+        if (cos_l > 0.0) {
+            float wt = cos_l * pc.omega * c;
+            st += (texelFetch(l_push, ar_texel(row, l), 0).rgb + pc.environment.rgb) * wt;
+            if (has_direct) {
+                sd += texelFetch(direct, ar_texel(row, l), 0).rgb * wt;
+            }
+        }
+    }
+    e_t = vec4(ar_store(st), 0.0);
+    e_d = vec4(ar_store(sd), 0.0);
+}

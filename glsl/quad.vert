@@ -1,0 +1,17 @@
+#version 450
+// Quads over whole rows [first, end) of one column block (push and local passes), drawn as a
+// 4-vertex triangle strip per instance.
+#include "common.glsl"
+
+layout(location = 0) in uvec3 quad;   // source row, first row, end row
+layout(location = 0) flat out uint source_row;
+
+void main() {
+    uint block = quad.y / pc.rows_per_column;
+    float x0 = float(block * pc.quad_width);
+    float y0 = float(quad.y % pc.rows_per_column);
+    float x = (gl_VertexIndex & 1) == 0 ? x0 : x0 + float(pc.quad_width);
+    float y = (gl_VertexIndex & 2) == 0 ? y0 : y0 + float(quad.z - quad.y);
+    gl_Position = ar_clip(vec2(x, y));
+    source_row = quad.x;
+}

@@ -1,0 +1,541 @@
+//! Vulkan device setup: a headless context the CLI, tests and benchmarks share, or a context
+//! wrapped around a device and queue a host application owns (engine embedding).
+//!
+//! Needs Vulkan 1.3 (dynamic rendering and synchronization2, both on lavapipe). Line
+//! rasterization uses VK_EXT_line_rasterization's rectangular (or Bresenham) mode when present
+//! so that every link line covers exactly its texels (see [`LineMode`]).
+
+use crate::error::{Error, Result, VkContext};
+use ash::vk;
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+use std::ffi::{c_void, CStr, CString};
+use std::mem::ManuallyDrop;
+use std::sync::{Arc, Mutex};
+
+const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
+
+/// How lines are rasterized, which decides where the vertex shaders put line endpoints.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum LineMode {
+    /// Rectangular lines (VK_EXT_line_rasterization or strict core lines): endpoints on texel
+    /// edges cover the texel centers strictly between them.
+    Rectangular,
+    /// Bresenham lines with the diamond-exit rule: endpoints on texel centers cover the first
+    /// texel and not the last.
+    Bresenham,
+}
+
+impl LineMode {
+    /// Offset added to texel-edge coordinates of line endpoints in this mode.
+    pub fn endpoint_offset(self) -> f32 {
+        match self {
+            LineMode::Rectangular => 0.0,
+            LineMode::Bresenham => 0.5,
+        }
+    }
+}
+
+/// Options for a headless context.
+#[derive(Debug, Clone, Default)]
+pub struct ContextOptions {
+    /// Enable VK_LAYER_KHRONOS_validation and record its messages (an error if the layer is
+    /// missing). Also switched on by the environment variable `ANTIRADIANCE_VALIDATION=1`.
+    pub validation: bool,
+    /// Pick the first device whose name contains this (else `ANTIRADIANCE_DEVICE`, else prefer
+    /// a discrete GPU).
+    pub device_name: Option<String>,
+}
+
+/// What the solver learned about the device.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct DeviceInfo {
+    /// `deviceName`.
+    pub name: String,
+    /// Driver name (e.g. `llvmpipe`, `NVIDIA`).
+    pub driver: String,
+    /// `maxImageDimension2D`.
+    pub max_image_dimension: u32,
+    /// Nanoseconds per timestamp tick.
+    pub timestamp_period: f32,
+    /// Whether the queue writes timestamps.
+    pub timestamps: bool,
+    /// Line rasterization in use.
+    pub line_mode: LineMode,
+    /// Largest single allocation / heap size of device-local memory, bytes.
+    pub device_local_bytes: u64,
+}
+
+/// Validation messages collected by the debug messenger.
+#[derive(Debug, Default)]
+pub struct ValidationLog {
+    errors: Mutex<Vec<String>>,
+}
+
+impl ValidationLog {
+    /// Validation errors (and warnings) seen so far.
+    pub fn messages(&self) -> Vec<String> {
+        self.errors.lock().map(|e| e.clone()).unwrap_or_default()
+    }
+}
+
+unsafe extern "system" fn on_message(
+    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
+    _kind: vk::DebugUtilsMessageTypeFlagsEXT,
+    data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
+    user: *mut c_void,
+) -> vk::Bool32 {
+    if data.is_null() || user.is_null() {
+        return vk::FALSE;
+    }
+    let msg = unsafe { (*data).message_as_c_str() }
+        .map(|m| m.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let log = unsafe { &*(user as *const ValidationLog) };
+    if severity.intersects(
+        vk::DebugUtilsMessageSeverityFlagsEXT::ERROR
+            | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING,
+    ) {
+        eprintln!("vulkan validation: {msg}");
+        if let Ok(mut e) = log.errors.lock() {
+            e.push(msg);
+        }
+    }
+    vk::FALSE
+}
+
+/// A Vulkan device, queue and allocator, owned or borrowed from a host application.
+pub struct Context {
+    /// Loader entry points.
+    pub entry: ash::Entry,
+    /// Instance.
+    pub instance: ash::Instance,
+    /// Physical device.
+    pub physical_device: vk::PhysicalDevice,
+    /// Logical device.
+    pub device: ash::Device,
+    /// Graphics queue the solver submits to (or records for).
+    pub queue: vk::Queue,
+    /// Its family.
+    pub queue_family: u32,
+    /// Memory allocator (ours, even on a host's device).
+    pub allocator: ManuallyDrop<Mutex<Allocator>>,
+    /// Debug-utils device functions, when the instance has the extension.
+    pub debug: Option<ash::ext::debug_utils::Device>,
+    /// Device properties the solver uses.
+    pub info: DeviceInfo,
+    messenger: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+    validation: Arc<ValidationLog>,
+    pool: vk::CommandPool,
+    owned: bool,
+    line_ext: bool,
+    f16_rounding: std::sync::OnceLock<super::diagnostics::BlendRounding>,
+}
+
+/// A device created by a host application, for [`Context::from_host`].
+pub struct HostDevice {
+    /// Loader.
+    pub entry: ash::Entry,
+    /// Host's instance (kept alive by the host).
+    pub instance: ash::Instance,
+    /// Host's physical device.
+    pub physical_device: vk::PhysicalDevice,
+    /// Host's device; must have Vulkan 1.3 dynamic rendering and synchronization2 enabled, and
+    /// the core `independentBlend` feature.
+    pub device: ash::Device,
+    /// Queue (graphics) the solver's command buffers will be submitted to.
+    pub queue: vk::Queue,
+    /// Its family.
+    pub queue_family: u32,
+    /// Whether the host enabled VK_EXT_line_rasterization with `rectangularLines`.
+    pub rectangular_lines: bool,
+    /// Whether the host's instance has VK_EXT_debug_utils enabled.
+    pub debug_utils: bool,
+}
+
+impl Context {
+    /// Creates a headless instance and device.
+    pub fn headless(opts: &ContextOptions) -> Result<Arc<Self>> {
+        let entry = unsafe { ash::Entry::load() }
+            .map_err(|e| Error::Device(format!("cannot load the Vulkan loader: {e}")))?;
+        let validation =
+            opts.validation || std::env::var("ANTIRADIANCE_VALIDATION").is_ok_and(|v| v == "1");
+        let layers = unsafe { entry.enumerate_instance_layer_properties() }.vk("listing layers")?;
+        let has_layer = layers
+            .iter()
+            .any(|l| l.layer_name_as_c_str().ok() == Some(VALIDATION_LAYER));
+        if validation && !has_layer {
+            return Err(Error::Device(
+                "validation requested but VK_LAYER_KHRONOS_validation is not installed \
+                 (apt-get install vulkan-validationlayers)"
+                    .into(),
+            ));
+        }
+        let exts = unsafe { entry.enumerate_instance_extension_properties(None) }
+            .vk("listing instance extensions")?;
+        let has_debug = exts
+            .iter()
+            .any(|e| e.extension_name_as_c_str().ok() == Some(vk::EXT_DEBUG_UTILS_NAME));
+        let app = CString::new("antiradiance").unwrap();
+        let app_info = vk::ApplicationInfo::default()
+            .application_name(&app)
+            .engine_name(&app)
+            .api_version(vk::API_VERSION_1_3);
+        let layer_ptrs = if validation {
+            vec![VALIDATION_LAYER.as_ptr()]
+        } else {
+            vec![]
+        };
+        let ext_ptrs = if has_debug {
+            vec![vk::EXT_DEBUG_UTILS_NAME.as_ptr()]
+        } else {
+            vec![]
+        };
+        let instance = unsafe {
+            entry.create_instance(
+                &vk::InstanceCreateInfo::default()
+                    .application_info(&app_info)
+                    .enabled_layer_names(&layer_ptrs)
+                    .enabled_extension_names(&ext_ptrs),
+                None,
+            )
+        }
+        .vk("vkCreateInstance")?;
+        let log = Arc::new(ValidationLog::default());
+        let messenger = if has_debug && validation {
+            let du = ash::ext::debug_utils::Instance::new(&entry, &instance);
+            let info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+                .message_severity(
+                    vk::DebugUtilsMessageSeverityFlagsEXT::ERROR
+                        | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING,
+                )
+                .message_type(
+                    vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                        | vk::DebugUtilsMessageTypeFlagsEXT::GENERAL,
+                )
+                .pfn_user_callback(Some(on_message))
+                .user_data(Arc::as_ptr(&log) as *mut c_void);
+            let m = unsafe { du.create_debug_utils_messenger(&info, None) }
+                .vk("creating the debug messenger")?;
+            Some((du, m))
+        } else {
+            None
+        };
+        let (physical_device, queue_family) = pick_device(&instance, opts.device_name.clone())
+            .inspect_err(|_| unsafe { instance.destroy_instance(None) })?;
+        let dev_exts = unsafe { instance.enumerate_device_extension_properties(physical_device) }
+            .vk("listing device extensions")?;
+        let has_lines = dev_exts
+            .iter()
+            .any(|e| e.extension_name_as_c_str().ok() == Some(vk::EXT_LINE_RASTERIZATION_NAME));
+        let mut line_feat = vk::PhysicalDeviceLineRasterizationFeaturesEXT::default();
+        let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
+        let mut f2 = vk::PhysicalDeviceFeatures2::default().push_next(&mut f13);
+        if has_lines {
+            f2 = f2.push_next(&mut line_feat);
+        }
+        unsafe { instance.get_physical_device_features2(physical_device, &mut f2) };
+        let blend_ok = f2.features.independent_blend == vk::TRUE;
+        let (dyn_ok, sync_ok) = (
+            f13.dynamic_rendering == vk::TRUE,
+            f13.synchronization2 == vk::TRUE,
+        );
+        let (rect, bres) = (
+            has_lines && line_feat.rectangular_lines == vk::TRUE,
+            has_lines && line_feat.bresenham_lines == vk::TRUE,
+        );
+        if !dyn_ok || !sync_ok || !blend_ok {
+            unsafe { instance.destroy_instance(None) };
+            return Err(Error::Device(
+                "the device lacks dynamicRendering, synchronization2 (Vulkan 1.3) or independentBlend".into(),
+            ));
+        }
+        let mut en13 = vk::PhysicalDeviceVulkan13Features::default()
+            .dynamic_rendering(true)
+            .synchronization2(true);
+        let mut en_lines = vk::PhysicalDeviceLineRasterizationFeaturesEXT::default()
+            .rectangular_lines(rect)
+            .bresenham_lines(bres);
+        let prio = [1.0f32];
+        let qinfo = [vk::DeviceQueueCreateInfo::default()
+            .queue_family_index(queue_family)
+            .queue_priorities(&prio)];
+        let dev_ext_ptrs = if rect || bres {
+            vec![vk::EXT_LINE_RASTERIZATION_NAME.as_ptr()]
+        } else {
+            vec![]
+        };
+        // The antiradiance step masks I_total while writing I_ex: per-attachment blend state.
+        let core = vk::PhysicalDeviceFeatures::default().independent_blend(true);
+        let mut dinfo = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&qinfo)
+            .enabled_features(&core)
+            .enabled_extension_names(&dev_ext_ptrs)
+            .push_next(&mut en13);
+        if rect || bres {
+            dinfo = dinfo.push_next(&mut en_lines);
+        }
+        let device = unsafe { instance.create_device(physical_device, &dinfo, None) }
+            .vk("vkCreateDevice")?;
+        let queue = unsafe { device.get_device_queue(queue_family, 0) };
+        let line_mode = if rect || !bres {
+            LineMode::Rectangular
+        } else {
+            LineMode::Bresenham
+        };
+        Self::finish(
+            entry,
+            instance,
+            physical_device,
+            device,
+            queue,
+            queue_family,
+            line_mode,
+            rect || bres,
+            has_debug,
+            messenger,
+            log,
+            true,
+        )
+    }
+
+    /// Wraps a host application's device and queue. The solver records into command buffers the
+    /// host gives it and never destroys the host's objects.
+    pub fn from_host(host: HostDevice) -> Result<Arc<Self>> {
+        // Without the extension, strict core lines are rectangular too.
+        let line_mode = LineMode::Rectangular;
+        let line_ext = host.rectangular_lines;
+        Self::finish(
+            host.entry,
+            host.instance,
+            host.physical_device,
+            host.device,
+            host.queue,
+            host.queue_family,
+            line_mode,
+            line_ext,
+            host.debug_utils,
+            None,
+            Arc::new(ValidationLog::default()),
+            false,
+        )
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn finish(
+        entry: ash::Entry,
+        instance: ash::Instance,
+        physical_device: vk::PhysicalDevice,
+        device: ash::Device,
+        queue: vk::Queue,
+        queue_family: u32,
+        line_mode: LineMode,
+        line_ext: bool,
+        has_debug: bool,
+        messenger: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+        validation: Arc<ValidationLog>,
+        owned: bool,
+    ) -> Result<Arc<Self>> {
+        let props = unsafe { instance.get_physical_device_properties(physical_device) };
+        let mut driver = vk::PhysicalDeviceDriverProperties::default();
+        let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver);
+        unsafe { instance.get_physical_device_properties2(physical_device, &mut p2) };
+        let qprops =
+            unsafe { instance.get_physical_device_queue_family_properties(physical_device) };
+        let mem = unsafe { instance.get_physical_device_memory_properties(physical_device) };
+        let device_local_bytes = mem.memory_heaps[..mem.memory_heap_count as usize]
+            .iter()
+            .filter(|h| h.flags.contains(vk::MemoryHeapFlags::DEVICE_LOCAL))
+            .map(|h| h.size)
+            .max()
+            .unwrap_or(0);
+        let info = DeviceInfo {
+            name: props
+                .device_name_as_c_str()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            driver: driver
+                .driver_name_as_c_str()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            max_image_dimension: props.limits.max_image_dimension2_d,
+            timestamp_period: props.limits.timestamp_period,
+            timestamps: qprops[queue_family as usize].timestamp_valid_bits > 0,
+            line_mode,
+            device_local_bytes,
+        };
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: instance.clone(),
+            device: device.clone(),
+            physical_device,
+            debug_settings: Default::default(),
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        })
+        .map_err(|e| Error::Device(format!("creating the allocator: {e}")))?;
+        let pool = unsafe {
+            device.create_command_pool(
+                &vk::CommandPoolCreateInfo::default()
+                    .queue_family_index(queue_family)
+                    .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER),
+                None,
+            )
+        }
+        .vk("creating the command pool")?;
+        let debug = has_debug.then(|| ash::ext::debug_utils::Device::new(&instance, &device));
+        let ctx = Self {
+            entry,
+            instance,
+            physical_device,
+            device,
+            queue,
+            queue_family,
+            allocator: ManuallyDrop::new(Mutex::new(allocator)),
+            debug,
+            info,
+            messenger,
+            validation,
+            pool,
+            owned,
+            line_ext,
+            f16_rounding: std::sync::OnceLock::new(),
+        };
+        ctx.name(pool, "antiradiance command pool");
+        Ok(Arc::new(ctx))
+    }
+
+    /// How this device rounds additive float16 blending (probed once, on first use).
+    pub fn f16_blend_rounding(&self) -> Result<super::diagnostics::BlendRounding> {
+        if let Some(r) = self.f16_rounding.get() {
+            return Ok(*r);
+        }
+        let r = super::diagnostics::f16_blend_rounding(self)?;
+        Ok(*self.f16_rounding.get_or_init(|| r))
+    }
+
+    /// Whether pipelines must chain VK_EXT_line_rasterization state.
+    pub fn line_rasterization_ext(&self) -> bool {
+        self.line_ext
+    }
+
+    /// Validation messages recorded so far (empty unless validation is on).
+    pub fn validation_messages(&self) -> Vec<String> {
+        self.validation.messages()
+    }
+
+    /// Whether the validation layer is active on this context.
+    pub fn validation_enabled(&self) -> bool {
+        self.messenger.is_some()
+    }
+
+    /// Gives a Vulkan object a debug-utils name (seen by validation messages and RenderDoc).
+    pub fn name<H: vk::Handle>(&self, handle: H, name: &str) {
+        if let Some(d) = &self.debug {
+            let n = CString::new(name).unwrap_or_default();
+            let info = vk::DebugUtilsObjectNameInfoEXT::default()
+                .object_handle(handle)
+                .object_name(&n);
+            unsafe {
+                let _ = d.set_debug_utils_object_name(&info);
+            }
+        }
+    }
+
+    /// Records into a fresh command buffer, submits it to the queue and waits.
+    pub fn submit_and_wait(&self, record: impl FnOnce(vk::CommandBuffer)) -> Result<()> {
+        let d = &self.device;
+        let cmd = unsafe {
+            d.allocate_command_buffers(
+                &vk::CommandBufferAllocateInfo::default()
+                    .command_pool(self.pool)
+                    .command_buffer_count(1),
+            )
+        }
+        .vk("allocating a command buffer")?[0];
+        let fence = unsafe { d.create_fence(&vk::FenceCreateInfo::default(), None) }
+            .vk("creating a fence")?;
+        let result = (|| {
+            unsafe {
+                d.begin_command_buffer(
+                    cmd,
+                    &vk::CommandBufferBeginInfo::default()
+                        .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+                )
+            }
+            .vk("vkBeginCommandBuffer")?;
+            record(cmd);
+            unsafe { d.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")?;
+            let cmds = [cmd];
+            let submit = vk::SubmitInfo::default().command_buffers(&cmds);
+            unsafe { d.queue_submit(self.queue, &[submit], fence) }.vk("vkQueueSubmit")?;
+            unsafe { d.wait_for_fences(&[fence], true, u64::MAX) }.vk("waiting for the GPU")
+        })();
+        unsafe {
+            d.destroy_fence(fence, None);
+            d.free_command_buffers(self.pool, &[cmd]);
+        }
+        result
+    }
+}
+
+fn pick_device(
+    instance: &ash::Instance,
+    wanted: Option<String>,
+) -> Result<(vk::PhysicalDevice, u32)> {
+    let wanted = wanted.or_else(|| std::env::var("ANTIRADIANCE_DEVICE").ok());
+    let devices = unsafe { instance.enumerate_physical_devices() }.vk("listing devices")?;
+    let mut best: Option<(i32, vk::PhysicalDevice, u32)> = None;
+    for pd in devices {
+        let props = unsafe { instance.get_physical_device_properties(pd) };
+        if props.api_version < vk::API_VERSION_1_3 {
+            continue;
+        }
+        let name = props
+            .device_name_as_c_str()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        if let Some(w) = &wanted {
+            if !name.contains(w.as_str()) {
+                continue;
+            }
+        }
+        let qf = unsafe { instance.get_physical_device_queue_family_properties(pd) };
+        let Some(family) = qf
+            .iter()
+            .position(|q| q.queue_flags.contains(vk::QueueFlags::GRAPHICS))
+        else {
+            continue;
+        };
+        let score = match props.device_type {
+            vk::PhysicalDeviceType::DISCRETE_GPU => 3,
+            vk::PhysicalDeviceType::INTEGRATED_GPU => 2,
+            vk::PhysicalDeviceType::CPU => 1,
+            _ => 0,
+        };
+        if best.is_none_or(|b| score > b.0) {
+            best = Some((score, pd, family as u32));
+        }
+    }
+    best.map(|b| (b.1, b.2)).ok_or_else(|| {
+        Error::Device(match wanted {
+            Some(w) => format!("no Vulkan 1.3 device with a graphics queue named like `{w}`"),
+            None => "no Vulkan 1.3 device with a graphics queue (install mesa-vulkan-drivers for lavapipe)".into(),
+        })
+    })
+}
+
+impl Drop for Context {
+    fn drop(&mut self) {
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            self.device.destroy_command_pool(self.pool, None);
+            ManuallyDrop::drop(&mut self.allocator);
+            if self.owned {
+                self.device.destroy_device(None);
+                if let Some((du, m)) = self.messenger.take() {
+                    du.destroy_debug_utils_messenger(m, None);
+                }
+                self.instance.destroy_instance(None);
+            }
+        }
+    }
+}

@@ -1,0 +1,19 @@
+//! The GPU design of §4 on Vulkan: tables as float16 (or float32) images, links as line
+//! primitives with additive blending, push as quads, local-pass fragment shaders on ping-pong
+//! images, pull as lines. See the README for the module ↔ paper map.
+
+pub mod barrier;
+pub mod context;
+pub mod diagnostics;
+pub mod layout;
+pub mod memory;
+pub mod passes;
+pub mod pipelines;
+pub mod profiler;
+pub mod resources;
+pub mod shaders;
+pub mod solver;
+pub mod tables;
+
+pub use context::{Context, ContextOptions, HostDevice, LineMode};
+pub use solver::{GpuOptions, GpuSolver};

@@ -1,0 +1,229 @@
+//! Graphics pipelines of the passes (dynamic rendering, dynamic viewport/scissor), the solver's
+//! one descriptor-set layout and pipeline layout. Additive blending is a per-target option of a
+//! pipeline, so accumulation is explicit where a pipeline is made.
+
+use super::context::Context;
+use super::layout::{binding, PassConstants};
+use super::shaders::compile;
+use crate::error::{Result, VkContext};
+use ash::vk;
+use std::ffi::CStr;
+
+/// One color target of a pipeline.
+#[derive(Debug, Clone, Copy)]
+pub struct Target {
+    /// Attachment format.
+    pub format: vk::Format,
+    /// Add to what is there (ONE, ONE) instead of overwriting.
+    pub additive: bool,
+    /// Whether the pipeline writes the target at all (else the write mask is empty).
+    pub write: bool,
+}
+
+/// What a pipeline draws.
+pub struct PipelineDesc<'a> {
+    /// Debug name (also the pass name).
+    pub name: &'a str,
+    /// Vertex shader file under `glsl/`.
+    pub vert: &'a str,
+    /// Fragment shader file under `glsl/`.
+    pub frag: &'a str,
+    /// Line list or triangle strip.
+    pub topology: vk::PrimitiveTopology,
+    /// Per-instance record size (bytes); 0 for no vertex input.
+    pub stride: u32,
+    /// Per-instance attributes: (format, offset), location = index.
+    pub attributes: &'a [(vk::Format, u32)],
+    /// Color targets.
+    pub targets: &'a [Target],
+    /// Value of specialization constant 0 (the local-pass mode), if the shader has it.
+    pub mode: Option<u32>,
+}
+
+/// The shared layouts.
+pub struct Layouts {
+    /// Set layout with every binding of [`binding`].
+    pub set: vk::DescriptorSetLayout,
+    /// Pipeline layout: that set plus [`PassConstants`] push constants.
+    pub pipeline: vk::PipelineLayout,
+}
+
+impl Layouts {
+    /// Creates the layouts.
+    pub fn new(ctx: &Context) -> Result<Self> {
+        let bindings: Vec<_> = (0..binding::COUNT)
+            .map(|b| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(b)
+                    .descriptor_type(if binding::BUFFERS.contains(&b) {
+                        vk::DescriptorType::STORAGE_BUFFER
+                    } else {
+                        vk::DescriptorType::COMBINED_IMAGE_SAMPLER
+                    })
+                    .descriptor_count(1)
+                    .stage_flags(vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT)
+            })
+            .collect();
+        let set = unsafe {
+            ctx.device.create_descriptor_set_layout(
+                &vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings),
+                None,
+            )
+        }
+        .vk("creating the descriptor set layout")?;
+        ctx.name(set, "antiradiance set layout");
+        let ranges = [vk::PushConstantRange::default()
+            .stage_flags(vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT)
+            .size(std::mem::size_of::<PassConstants>() as u32)];
+        let sets = [set];
+        let pipeline = unsafe {
+            ctx.device.create_pipeline_layout(
+                &vk::PipelineLayoutCreateInfo::default()
+                    .set_layouts(&sets)
+                    .push_constant_ranges(&ranges),
+                None,
+            )
+        }
+        .vk("creating the pipeline layout")?;
+        ctx.name(pipeline, "antiradiance pipeline layout");
+        Ok(Self { set, pipeline })
+    }
+
+    /// Frees the layouts.
+    pub fn destroy(&self, ctx: &Context) {
+        unsafe {
+            ctx.device.destroy_pipeline_layout(self.pipeline, None);
+            ctx.device.destroy_descriptor_set_layout(self.set, None);
+        }
+    }
+}
+
+const MAIN: &CStr = c"main";
+
+/// Builds a graphics pipeline from `desc`.
+pub fn create(
+    ctx: &Context,
+    layout: vk::PipelineLayout,
+    desc: &PipelineDesc<'_>,
+) -> Result<vk::Pipeline> {
+    let d = &ctx.device;
+    let module = |file: &str| -> Result<vk::ShaderModule> {
+        let code = compile(file)?;
+        let m = unsafe {
+            d.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&code), None)
+        }
+        .vk(file)?;
+        ctx.name(m, file);
+        Ok(m)
+    };
+    let vs = module(desc.vert)?;
+    let fs = module(desc.frag).inspect_err(|_| unsafe { d.destroy_shader_module(vs, None) })?;
+    let spec_data = desc.mode.unwrap_or(0).to_ne_bytes();
+    let spec_entries = [vk::SpecializationMapEntry::default()
+        .constant_id(0)
+        .offset(0)
+        .size(4)];
+    let spec = vk::SpecializationInfo::default()
+        .map_entries(&spec_entries)
+        .data(&spec_data);
+    let mut fs_stage = vk::PipelineShaderStageCreateInfo::default()
+        .stage(vk::ShaderStageFlags::FRAGMENT)
+        .module(fs)
+        .name(MAIN);
+    if desc.mode.is_some() {
+        fs_stage = fs_stage.specialization_info(&spec);
+    }
+    let stages = [
+        vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::VERTEX)
+            .module(vs)
+            .name(MAIN),
+        fs_stage,
+    ];
+    let vb = [vk::VertexInputBindingDescription::default()
+        .binding(0)
+        .stride(desc.stride)
+        .input_rate(vk::VertexInputRate::INSTANCE)];
+    let attrs: Vec<_> = desc
+        .attributes
+        .iter()
+        .enumerate()
+        .map(|(i, &(format, offset))| {
+            vk::VertexInputAttributeDescription::default()
+                .location(i as u32)
+                .binding(0)
+                .format(format)
+                .offset(offset)
+        })
+        .collect();
+    let vertex_input = if desc.stride > 0 {
+        vk::PipelineVertexInputStateCreateInfo::default()
+            .vertex_binding_descriptions(&vb)
+            .vertex_attribute_descriptions(&attrs)
+    } else {
+        vk::PipelineVertexInputStateCreateInfo::default()
+    };
+    let assembly = vk::PipelineInputAssemblyStateCreateInfo::default().topology(desc.topology);
+    let viewport = vk::PipelineViewportStateCreateInfo::default()
+        .viewport_count(1)
+        .scissor_count(1);
+    let is_line = desc.topology == vk::PrimitiveTopology::LINE_LIST;
+    let mut line_state = vk::PipelineRasterizationLineStateCreateInfoEXT::default()
+        .line_rasterization_mode(match ctx.info.line_mode {
+            super::context::LineMode::Rectangular => vk::LineRasterizationModeEXT::RECTANGULAR,
+            super::context::LineMode::Bresenham => vk::LineRasterizationModeEXT::BRESENHAM,
+        });
+    let mut raster = vk::PipelineRasterizationStateCreateInfo::default()
+        .polygon_mode(vk::PolygonMode::FILL)
+        .cull_mode(vk::CullModeFlags::NONE)
+        .line_width(1.0);
+    if is_line && ctx.line_rasterization_ext() {
+        raster = raster.push_next(&mut line_state);
+    }
+    let ms = vk::PipelineMultisampleStateCreateInfo::default()
+        .rasterization_samples(vk::SampleCountFlags::TYPE_1);
+    let blends: Vec<_> = desc
+        .targets
+        .iter()
+        .map(|t| {
+            vk::PipelineColorBlendAttachmentState::default()
+                .blend_enable(t.additive)
+                .src_color_blend_factor(vk::BlendFactor::ONE)
+                .dst_color_blend_factor(vk::BlendFactor::ONE)
+                .color_blend_op(vk::BlendOp::ADD)
+                .src_alpha_blend_factor(vk::BlendFactor::ONE)
+                .dst_alpha_blend_factor(vk::BlendFactor::ONE)
+                .alpha_blend_op(vk::BlendOp::ADD)
+                .color_write_mask(if t.write {
+                    vk::ColorComponentFlags::RGBA
+                } else {
+                    vk::ColorComponentFlags::empty()
+                })
+        })
+        .collect();
+    let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blends);
+    let dynamic = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+    let dyn_state = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic);
+    let formats: Vec<_> = desc.targets.iter().map(|t| t.format).collect();
+    let mut rendering =
+        vk::PipelineRenderingCreateInfo::default().color_attachment_formats(&formats);
+    let info = vk::GraphicsPipelineCreateInfo::default()
+        .stages(&stages)
+        .vertex_input_state(&vertex_input)
+        .input_assembly_state(&assembly)
+        .viewport_state(&viewport)
+        .rasterization_state(&raster)
+        .multisample_state(&ms)
+        .color_blend_state(&blend)
+        .dynamic_state(&dyn_state)
+        .layout(layout)
+        .push_next(&mut rendering);
+    let result = unsafe { d.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) };
+    unsafe {
+        d.destroy_shader_module(vs, None);
+        d.destroy_shader_module(fs, None);
+    }
+    let p = result.map_err(|(_, e)| e).vk(desc.name)?[0];
+    ctx.name(p, desc.name);
+    Ok(p)
+}

@@ -1,0 +1,419 @@
+//! The GPU solver: the same iterations as [`crate::solver::CpuSolver`], recorded as raster
+//! passes. It can submit to its own queue or record into a command buffer a host gives it.
+
+use super::context::Context;
+use super::diagnostics::BlendRounding;
+use super::layout::{mode, PassConstants, FLAG_DIRECT, FLAG_HALF};
+use super::passes::{self, Pass, Pipelines};
+use super::pipelines::Layouts;
+use super::profiler::Profiler;
+use super::resources::{decode, encode, MemoryReport, Resources};
+use crate::error::Result;
+use crate::scene::{Precision, Scheme};
+use crate::solver::{LocalMode, Table};
+use crate::system::System;
+use ash::vk;
+use glam::DVec3;
+use std::sync::Arc;
+
+/// GPU solver options.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct GpuOptions {
+    /// Table texel format.
+    pub precision: Precision,
+    /// Caps the rows per column block below maxImageDimension2D (tests use it to exercise
+    /// the column split on small scenes).
+    pub column_height: Option<u32>,
+    /// Accumulate L_in and L_push in the table format even where the device truncates
+    /// float16 blending (by default such devices accumulate in float32; see [`GpuSolver::fallbacks`]).
+    pub force_table_accumulation: bool,
+}
+
+impl Default for GpuOptions {
+    fn default() -> Self {
+        Self {
+            precision: Precision::F16,
+            column_height: None,
+            force_table_accumulation: false,
+        }
+    }
+}
+
+/// Fragments each pass draws per propagation (the raster work, §4.2).
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct Fragments {
+    /// Global: Σ link spans.
+    pub global: u64,
+    /// Push: Σ quad rows × bins.
+    pub push: u64,
+    /// Local: irradiance texels + leaf rows × bins.
+    pub local: u64,
+    /// Pull: (leaf, ancestor) pairs × bins.
+    pub pull: u64,
+}
+
+/// Images a host application may read (all in `SHADER_READ_ONLY_OPTIMAL` after a recorded
+/// iteration), with the layout that addresses them.
+#[derive(Debug, Clone, Copy)]
+pub struct SolverImages {
+    /// Leaves' current I_ex.
+    pub leaf_ex: (vk::Image, vk::ImageView),
+    /// Clusters' I_ex.
+    pub cluster_ex: (vk::Image, vk::ImageView),
+    /// Display intensity I_total (attachment layout after the local pass).
+    pub i_total: (vk::Image, vk::ImageView),
+    /// Row/bin → texel layout.
+    pub layout: super::tables::TableLayout,
+}
+
+/// Antiradiance solver on Vulkan raster passes.
+pub struct GpuSolver {
+    ctx: Arc<Context>,
+    res: Resources,
+    layouts: Layouts,
+    pipes: Pipelines,
+    profiler: Profiler,
+    parity: usize,
+    constants: PassConstants,
+    timings: Vec<(String, f64)>,
+    fallbacks: Vec<String>,
+}
+
+impl GpuSolver {
+    /// Creates every image, buffer and pipeline `sys` needs and uploads the links and tables.
+    pub fn new(ctx: Arc<Context>, sys: &System, opts: GpuOptions) -> Result<Self> {
+        let format = super::resources::table_format(opts.precision);
+        let mut fallbacks = Vec::new();
+        let accum_format = if opts.precision == Precision::F16
+            && !opts.force_table_accumulation
+            && ctx.f16_blend_rounding()? == BlendRounding::TowardZero
+        {
+            fallbacks.push(format!(
+                "{} truncates float16 blending; L_in and L_push accumulate in float32 (tables stay float16)",
+                ctx.info.driver
+            ));
+            vk::Format::R32G32B32A32_SFLOAT
+        } else {
+            format
+        };
+        let mut res = Resources::new(
+            &ctx,
+            sys,
+            opts.precision,
+            accum_format,
+            opts.column_height.unwrap_or(u32::MAX),
+        )?;
+        let layouts = Layouts::new(&ctx)?;
+        res.write_sets(&ctx, layouts.set)?;
+        let pipes = Pipelines::new(&ctx, layouts.pipeline, res.format, res.accum_format)?;
+        let profiler = Profiler::new(&ctx, 1024)?;
+        let constants = PassConstants {
+            bins: res.layout.bins,
+            rows_per_column: res.layout.rows_per_column,
+            line_offset: ctx.info.line_mode.endpoint_offset(),
+            omega: sys.bins.omega as f32,
+            flags: if opts.precision == Precision::F16 {
+                FLAG_HALF
+            } else {
+                0
+            },
+            ..Default::default()
+        };
+        Ok(Self {
+            ctx,
+            res,
+            layouts,
+            pipes,
+            profiler,
+            parity: 0,
+            constants,
+            timings: Vec::new(),
+            fallbacks,
+        })
+    }
+
+    /// Departures from the requested configuration, each a sentence for stderr and the stats JSON.
+    pub fn fallbacks(&self) -> &[String] {
+        &self.fallbacks
+    }
+
+    /// The context.
+    pub fn context(&self) -> &Arc<Context> {
+        &self.ctx
+    }
+
+    /// Constant environment radiance (creates antiradiance, like the CPU solver).
+    pub fn set_environment(&mut self, radiance: DVec3) {
+        self.constants.environment = [radiance.x as f32, radiance.y as f32, radiance.z as f32, 0.0];
+    }
+
+    /// Direct incident radiance per node and bin (reflected only), e.g. from
+    /// [`crate::solver::CpuSolver::direct_in`].
+    pub fn set_direct(&mut self, table: &Table) -> Result<()> {
+        let l = self.res.layout;
+        let mut img = self.ctx.create_image(
+            "direct light",
+            l.width(),
+            l.rows_per_column,
+            self.res.format,
+        )?;
+        self.ctx
+            .upload_image(&mut img, &encode(self.res.format, &l.from_table(table)))?;
+        let mut old = std::mem::replace(&mut self.res.images.direct, img);
+        self.ctx.destroy_image(&mut old);
+        self.res.update_set(&self.ctx, 0);
+        self.res.update_set(&self.ctx, 1);
+        self.constants.flags |= FLAG_DIRECT;
+        Ok(())
+    }
+
+    /// Starts a frame's timestamps; call once per command buffer before the `record_*` calls.
+    pub fn begin_frame(&mut self, cmd: vk::CommandBuffer) {
+        self.profiler.reset(&self.ctx, cmd);
+    }
+
+    fn prepare(&mut self, modes: &[u32]) -> Result<()> {
+        for &m in modes {
+            self.pipes
+                .ensure_local(&self.ctx, self.layouts.pipeline, &self.res, m)?;
+        }
+        Ok(())
+    }
+
+    /// Records the initial state: emission, reflected direct light and environment, the
+    /// environment's antiradiance, then pull (as [`crate::solver::CpuSolver::initialize`]).
+    pub fn record_initialize(&mut self, cmd: vk::CommandBuffer) -> Result<()> {
+        self.prepare(&[mode::BOTH])?;
+        self.record(cmd, None, mode::BOTH);
+        Ok(())
+    }
+
+    /// Records one propagation: global, push, local (in `local_mode`), pull.
+    pub fn record_propagation(
+        &mut self,
+        cmd: vk::CommandBuffer,
+        local_mode: LocalMode,
+    ) -> Result<()> {
+        let m = match local_mode {
+            LocalMode::Both => mode::BOTH,
+            LocalMode::Reflect => mode::REFLECT,
+            LocalMode::Antiradiance => mode::ANTIRADIANCE,
+        };
+        self.prepare(&[m])?;
+        self.record(cmd, Some(()), m);
+        Ok(())
+    }
+
+    /// Records global + push (or, for the initial state, the clears), then local and pull, and
+    /// swaps the ping-pong pair.
+    fn record(&mut self, cmd: vk::CommandBuffer, propagate: Option<()>, m: u32) {
+        let Self {
+            ctx,
+            res,
+            layouts,
+            pipes,
+            profiler: prof,
+            parity,
+            constants,
+            ..
+        } = self;
+        let cur = *parity;
+        let p = Pass {
+            ctx,
+            cmd,
+            layout: layouts.pipeline,
+            pipes,
+            set: res.sets[cur],
+            constants: *constants,
+        };
+        if propagate.is_some() {
+            prof.begin(ctx, cmd, "global");
+            passes::global::record(&p, res, cur);
+            prof.end(ctx, cmd);
+            prof.begin(ctx, cmd, "push");
+            passes::push::record(&p, res);
+            prof.end(ctx, cmd);
+        } else {
+            prof.begin(ctx, cmd, "initialize");
+            for img in [&mut res.images.cluster_ex, &mut res.images.i_total] {
+                passes::local::clear(&p, img);
+            }
+            for img in res.images.leaf_ex.iter_mut() {
+                passes::local::clear(&p, img);
+            }
+            passes::push::clear(&p, res);
+            prof.end(ctx, cmd);
+        }
+        prof.begin(ctx, cmd, "local");
+        passes::local::record(&p, res, cur, m);
+        prof.end(ctx, cmd);
+        prof.begin(ctx, cmd, "pull");
+        passes::pull::record(&p, res, 1 - cur);
+        prof.end(ctx, cmd);
+        *parity = 1 - cur;
+    }
+
+    /// Records one iteration of `scheme` (as [`crate::solver::CpuSolver::iterate`]).
+    pub fn record_iteration(
+        &mut self,
+        cmd: vk::CommandBuffer,
+        scheme: Scheme,
+        antiradiance_steps: usize,
+    ) -> Result<()> {
+        match scheme {
+            Scheme::Symmetric => self.record_propagation(cmd, LocalMode::Both),
+            Scheme::Asymmetric => {
+                self.record_propagation(cmd, LocalMode::Reflect)?;
+                for _ in 0..antiradiance_steps {
+                    self.record_propagation(cmd, LocalMode::Antiradiance)?;
+                }
+                Ok(())
+            }
+        }
+    }
+
+    fn submit(
+        &mut self,
+        record: impl FnOnce(&mut Self, vk::CommandBuffer) -> Result<()>,
+    ) -> Result<()> {
+        let ctx = self.ctx.clone();
+        let mut inner = Ok(());
+        ctx.submit_and_wait(|cmd| {
+            self.begin_frame(cmd);
+            inner = record(self, cmd);
+        })?;
+        inner?;
+        self.timings = self.profiler.results(&ctx)?;
+        Ok(())
+    }
+
+    /// Submits the initial state and waits.
+    pub fn initialize(&mut self) -> Result<()> {
+        self.submit(|s, cmd| s.record_initialize(cmd))
+    }
+
+    /// Submits one iteration and waits.
+    pub fn iterate(&mut self, scheme: Scheme, antiradiance_steps: usize) -> Result<()> {
+        self.submit(|s, cmd| s.record_iteration(cmd, scheme, antiradiance_steps))
+    }
+
+    /// Initializes and runs `iterations` iterations in one submission.
+    pub fn solve(
+        &mut self,
+        scheme: Scheme,
+        iterations: usize,
+        antiradiance_steps: usize,
+    ) -> Result<()> {
+        self.submit(|s, cmd| {
+            s.record_initialize(cmd)?;
+            for _ in 0..iterations {
+                s.record_iteration(cmd, scheme, antiradiance_steps)?;
+            }
+            Ok(())
+        })
+    }
+
+    /// Pass timings (ms, in recording order) of the last submission made by this solver, or of
+    /// the host's last command buffer via [`GpuSolver::read_timings`].
+    pub fn timings(&self) -> &[(String, f64)] {
+        &self.timings
+    }
+
+    /// Reads the timestamps of a host-submitted command buffer (after it completed).
+    pub fn read_timings(&mut self) -> Result<&[(String, f64)]> {
+        self.timings = self.profiler.results(&self.ctx)?;
+        Ok(&self.timings)
+    }
+
+    /// Reads I_ex (leaves + clusters) back as a table.
+    pub fn read_i_ex(&mut self) -> Result<Table> {
+        let p = self.parity;
+        let ctx = self.ctx.clone();
+        let leaf = decode(
+            self.res.format,
+            &ctx.read_image(&mut self.res.images.leaf_ex[p])?,
+        );
+        let cl = decode(
+            super::resources::CLUSTER_FORMAT,
+            &ctx.read_image(&mut self.res.images.cluster_ex)?,
+        );
+        let sum: Vec<[f32; 4]> = leaf
+            .iter()
+            .zip(&cl)
+            .map(|(a, b)| [a[0] + b[0], a[1] + b[1], a[2] + b[2], 0.0])
+            .collect();
+        Ok(self.res.layout.to_table(&sum))
+    }
+
+    /// Reads I_total back.
+    pub fn read_i_total(&mut self) -> Result<Table> {
+        let ctx = self.ctx.clone();
+        let t = decode(
+            self.res.format,
+            &ctx.read_image(&mut self.res.images.i_total)?,
+        );
+        Ok(self.res.layout.to_table(&t))
+    }
+
+    /// Reads the pushed incident radiance back.
+    pub fn read_l_push(&mut self) -> Result<Table> {
+        let ctx = self.ctx.clone();
+        let t = decode(
+            self.res.accum_format,
+            &ctx.read_image(&mut self.res.images.l_push)?,
+        );
+        Ok(self.res.layout.to_table(&t))
+    }
+
+    /// The images a host application reads.
+    pub fn images(&self) -> SolverImages {
+        let im = &self.res.images;
+        let leaf = &im.leaf_ex[self.parity];
+        SolverImages {
+            leaf_ex: (leaf.raw, leaf.view),
+            cluster_ex: (im.cluster_ex.raw, im.cluster_ex.view),
+            i_total: (im.i_total.raw, im.i_total.view),
+            layout: self.res.layout,
+        }
+    }
+
+    /// GPU memory by purpose.
+    pub fn memory(&self) -> MemoryReport {
+        self.res.memory()
+    }
+
+    /// Fragments drawn per propagation by each pass.
+    pub fn fragments(&self) -> Fragments {
+        let d = &self.res.draw;
+        let m = self.res.layout.bins as u64;
+        let leaves: u64 = d.leaf_quads.iter().map(|q| (q.end - q.first) as u64).sum();
+        Fragments {
+            global: d.global_fragments,
+            push: d
+                .push_quads
+                .iter()
+                .map(|q| (q.end - q.first) as u64 * m)
+                .sum(),
+            local: leaves * (m + 1),
+            pull: d.pull_lines.len() as u64 * m,
+        }
+    }
+
+    /// Links drawn by the global pass.
+    pub fn link_count(&self) -> usize {
+        self.res.draw.links.len()
+    }
+}
+
+impl Drop for GpuSolver {
+    fn drop(&mut self) {
+        let ctx = self.ctx.clone();
+        unsafe {
+            let _ = ctx.device.device_wait_idle();
+        }
+        self.profiler.destroy(&ctx);
+        self.pipes.destroy(&ctx);
+        self.layouts.destroy(&ctx);
+        self.res.destroy(&ctx);
+    }
+}

@@ -1,0 +1,243 @@
+//! GPU passes against the CPU solver (the specification), on lavapipe in CI. Every test runs
+//! with the validation layer on; any validation message fails it.
+
+mod common;
+
+use antiradiance::gpu::layout::GpuLink;
+use antiradiance::gpu::tables::TableLayout;
+use antiradiance::gpu::{Context, ContextOptions, GpuOptions, GpuSolver};
+use antiradiance::scene::{load_scene, Precision, Scene, Scheme};
+use antiradiance::solver::Table;
+use antiradiance::{CpuSolver, System};
+use glam::DVec3;
+use std::path::Path;
+use std::sync::Arc;
+
+fn context() -> Arc<Context> {
+    let ctx = Context::headless(&ContextOptions {
+        validation: true,
+        device_name: None,
+    })
+    .expect("a Vulkan device (lavapipe: apt-get install mesa-vulkan-drivers)");
+    assert!(
+        ctx.validation_enabled(),
+        "validation layer must be active in tests"
+    );
+    ctx
+}
+
+fn assert_clean(ctx: &Context) {
+    let msgs = ctx.validation_messages();
+    assert!(msgs.is_empty(), "validation errors:\n{}", msgs.join("\n"));
+}
+
+/// Largest difference of `gpu` from `cpu`, relative to each element's scale: the largest bin of
+/// its CPU I_ex row (which holds its radiance and its antiradiance, the magnitudes that cancel in
+/// shadowed elements). A cluster row is a sum of its leaves' rows, so its scale is the largest bin
+/// of the sum of its leaves' magnitudes: the size of what the pull adds up.
+fn worst_relative(
+    sys: &System,
+    i_ex: &Table,
+    cpu: &Table,
+    gpu: &Table,
+    leaves_only: bool,
+) -> (f64, usize, usize) {
+    let m = cpu.bins;
+    let h = &sys.hierarchy;
+    let row_max = |n: usize| {
+        i_ex.row(n)
+            .iter()
+            .map(|v| v.abs().max_element())
+            .fold(0.0, f64::max)
+    };
+    let mut worst = (0.0, 0, 0);
+    for r in 0..cpu.rows() {
+        let is_leaf = sys.leaf_slot[r] != u32::MAX;
+        if leaves_only && !is_leaf {
+            continue;
+        }
+        let (c, g) = (cpu.row(r), gpu.row(r));
+        let scale = if is_leaf {
+            row_max(r)
+        } else {
+            (0..m)
+                .map(|j| {
+                    (r..h.nodes[r].end as usize)
+                        .filter(|&n| sys.leaf_slot[n] != u32::MAX)
+                        .map(|n| i_ex.row(n)[j].abs().max_element())
+                        .sum::<f64>()
+                })
+                .fold(0.0, f64::max)
+        };
+        for j in 0..m {
+            let d = (c[j] - g[j]).abs().max_element();
+            let rel = if scale > 0.0 { d / scale } else { d };
+            if rel > worst.0 {
+                worst = (rel, r, j);
+            }
+        }
+    }
+    worst
+}
+
+#[test]
+fn lines_cover_each_intended_texel_exactly_once() {
+    let ctx = context();
+    // 7 rows of 16 bins, at most 3 rows per column block: three column blocks.
+    let layout = TableLayout::with_column_height(7, 16, 4096, 3).unwrap();
+    assert_eq!(layout.columns, 3);
+    let spans = [
+        (0u32, 0u32, 16u32),
+        (1, 3, 4),
+        (2, 5, 11),
+        (3, 0, 1),
+        (4, 15, 16),
+        (5, 2, 9),
+        (6, 0, 16),
+        (2, 7, 13),
+    ];
+    let links: Vec<GpuLink> = spans
+        .iter()
+        .map(|&(r, lo, hi)| GpuLink {
+            receiver: r,
+            sender: 0,
+            bin_layer: 0,
+            span: lo | (hi << 16),
+            form_factor: 1.0,
+        })
+        .collect();
+    let hits = antiradiance::gpu::diagnostics::line_coverage(&ctx, &layout, &links).unwrap();
+    let w = layout.width();
+    for r in 0..7 {
+        for j in 0..16 {
+            let want = spans
+                .iter()
+                .filter(|s| s.0 == r && j >= s.1 && j < s.2)
+                .count() as f32;
+            let (x, y) = layout.texel(r, j);
+            assert_eq!(hits[(y * w + x) as usize], want, "row {r} bin {j}");
+        }
+    }
+    // Nothing outside the rows in use (the last column block has one unused row slot... here 7 = 3+3+1).
+    let total: f32 = hits.iter().sum();
+    let expect: u32 = spans.iter().map(|s| s.2 - s.1).sum();
+    assert_eq!(total, expect as f32);
+    assert_clean(&ctx);
+}
+
+fn small(path: &str, bins: usize, element_size: f64) -> Scene {
+    let mut s = load_scene(Path::new(env!("CARGO_MANIFEST_DIR")).join(path).as_path()).unwrap();
+    s.solver.bins = bins;
+    s.solver.element_size = element_size;
+    s
+}
+
+/// Runs both solvers side by side for `iterations` and checks every element and bin after the
+/// initial state and each iteration.
+fn compare(
+    ctx: &Arc<Context>,
+    scene: &Scene,
+    scheme: Scheme,
+    precision: Precision,
+    iterations: usize,
+    max_dim: Option<u32>,
+    direct: bool,
+) -> f64 {
+    let sys = System::build(scene).unwrap();
+    let mut cpu = CpuSolver::new(&sys);
+    let mut gpu = GpuSolver::new(
+        ctx.clone(),
+        &sys,
+        GpuOptions {
+            precision,
+            column_height: max_dim,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    cpu.set_environment(scene.environment);
+    gpu.set_environment(scene.environment);
+    if direct {
+        // A synthetic direct-light table: light from one side of the scene.
+        cpu.set_direct(|li, b| {
+            let d = sys.bins.centers[b];
+            let _ = li;
+            if d.y < -0.5 {
+                DVec3::new(2.0, 1.5, 1.0) * -d.y
+            } else {
+                DVec3::ZERO
+            }
+        });
+        gpu.set_direct(cpu.direct_in.as_ref().unwrap()).unwrap();
+    }
+    let tol = match precision {
+        Precision::F32 => 1e-3,
+        Precision::F16 => 2e-2,
+    };
+    cpu.initialize();
+    gpu.initialize().unwrap();
+    let mut worst_all: f64 = 0.0;
+    for it in 0..=iterations {
+        if it > 0 {
+            cpu.iterate(scheme, scene.solver.antiradiance_steps);
+            gpu.iterate(scheme, scene.solver.antiradiance_steps)
+                .unwrap();
+        }
+        let gex = gpu.read_i_ex().unwrap();
+        let ex = worst_relative(&sys, &cpu.i_ex, &cpu.i_ex, &gex, false);
+        if ex.0 > tol {
+            let (r, j) = (ex.1, ex.2);
+            eprintln!(
+                "I_ex row {r} (leaf: {}) bin {j}: cpu {:?} gpu {:?}",
+                sys.leaf_slot[r] != u32::MAX,
+                cpu.i_ex.row(r)[j],
+                gex.row(r)[j]
+            );
+        }
+        let gtot = gpu.read_i_total().unwrap();
+        let tot = worst_relative(&sys, &cpu.i_ex, &cpu.i_total, &gtot, true);
+        if tot.0 > tol {
+            let (r, j) = (tot.1, tot.2);
+            let slot = sys.leaf_slot[r] as usize;
+            let mat = &sys.materials[sys.leaves[slot].material as usize];
+            let gl = gpu.read_l_push().unwrap();
+            let lmax = cpu
+                .l_push
+                .row(r)
+                .iter()
+                .map(|v| v.abs().max_element())
+                .fold(0.0, f64::max);
+            let lerr = cpu
+                .l_push
+                .row(r)
+                .iter()
+                .zip(gl.row(r))
+                .map(|(a, b)| (*a - *b).abs().max_element())
+                .fold(0.0, f64::max);
+            eprintln!(
+                "I_total row {r} bin {j} material {} normal {:?}: cpu {:?} gpu {:?}; irradiance {:?}; L_push max {lmax:e} err {lerr:e}",
+                mat.name, sys.leaves[slot].normal, cpu.i_total.row(r)[j], gtot.row(r)[j], cpu.irradiance(slot)
+            );
+        }
+        assert!(
+            ex.0 <= tol && tot.0 <= tol,
+            "{:?} {scheme:?} {precision:?} iteration {it}: I_ex off by {:.2e} (row {} bin {}), I_total by {:.2e} (row {} bin {}); tolerance {tol:.0e}",
+            scene.path, ex.0, ex.1, ex.2, tot.0, tot.1, tot.2
+        );
+        worst_all = worst_all.max(ex.0).max(tot.0);
+    }
+    assert_clean(ctx);
+    worst_all
+}
+
+#[test]
+fn cornell_box_matches_cpu() {
+    let ctx = context();
+    let scene = small("scenes/cornell-box.toml", 32, 0.5);
+    for scheme in [Scheme::Symmetric, Scheme::Asymmetric] {
+        for p in [Precision::F32, Precision::F16] {
+            let w = compare(&ctx, &scene, scheme, p, 8, None, false);
+            eprintln!("cornell {scheme:?} {p:?}: worst {w:.2e}");
+        }
+    }
+}
