@@ -36,7 +36,7 @@ layout(push_constant) uniform PassConstants {
     float line_offset;
     float omega;
     uint flags;
-    vec4 environment;
+    vec4 environment;  // rgb: environment radiance (scaled); a: source scale (a power of two)
 } pc;
 
 struct Material {

@@ -74,7 +74,7 @@ void ar_local(bool glossy) {
                 }
             }
             tot = base * r_t;
-            ex = base * (r_t + r_d + mat.ke.rgb);
+            ex = base * (r_t + r_d + mat.ke.rgb * pc.environment.a);
         }
     } else if (cj < 0.0) {
         if (AR_MODE == AR_MODE_REFLECT) {

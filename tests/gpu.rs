@@ -156,7 +156,7 @@ fn compare(
     )
     .unwrap();
     cpu.set_environment(scene.environment);
-    gpu.set_environment(scene.environment);
+    gpu.set_environment(scene.environment).unwrap();
     if direct {
         // A synthetic direct-light table: light from one side of the scene.
         cpu.set_direct(|li, b| {
@@ -230,14 +230,60 @@ fn compare(
     worst_all
 }
 
-#[test]
-fn cornell_box_matches_cpu() {
+fn all_schemes_and_precisions(path: &str, bins: usize, element_size: f64) {
     let ctx = context();
-    let scene = small("scenes/cornell-box.toml", 32, 0.5);
+    let scene = small(path, bins, element_size);
     for scheme in [Scheme::Symmetric, Scheme::Asymmetric] {
         for p in [Precision::F32, Precision::F16] {
             let w = compare(&ctx, &scene, scheme, p, 8, None, false);
-            eprintln!("cornell {scheme:?} {p:?}: worst {w:.2e}");
+            eprintln!("{path} {scheme:?} {p:?}: worst {w:.2e}");
         }
     }
+}
+
+#[test]
+fn cornell_box_matches_cpu() {
+    all_schemes_and_precisions("scenes/cornell-box.toml", 32, 0.5);
+}
+
+#[test]
+fn glossy_cornell_box_matches_cpu() {
+    all_schemes_and_precisions("scenes/cornell-box-glossy.toml", 32, 0.5);
+}
+
+#[test]
+fn mnroom_matches_cpu() {
+    all_schemes_and_precisions("scenes/mnroom.toml", 32, 5.0);
+}
+
+/// Environment light (creates antiradiance), a direct-light table (reflected only) and tables
+/// split into column blocks, on the open Cornell box.
+#[test]
+fn environment_direct_and_column_split_match_cpu() {
+    let ctx = context();
+    let mut scene = small("scenes/cornell-box.toml", 32, 0.5);
+    scene.environment = DVec3::new(0.3, 0.4, 0.5);
+    for scheme in [Scheme::Symmetric, Scheme::Asymmetric] {
+        for p in [Precision::F32, Precision::F16] {
+            let w = compare(&ctx, &scene, scheme, p, 3, Some(97), true);
+            eprintln!("environment+direct, 97-row columns, {scheme:?} {p:?}: worst {w:.2e}");
+        }
+    }
+}
+
+/// The bundled default scene at its own settings (128 bins, 700K links).
+#[test]
+fn default_scene_at_full_settings_matches_cpu() {
+    let ctx = context();
+    let scene = small("scenes/cornell-box.toml", 128, 0.25);
+    let w = compare(
+        &ctx,
+        &scene,
+        Scheme::Symmetric,
+        Precision::F16,
+        2,
+        None,
+        false,
+    );
+    eprintln!("cornell-box full settings, f16: worst {w:.2e}");
 }

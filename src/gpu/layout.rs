@@ -22,7 +22,8 @@ pub struct PassConstants {
     pub omega: f32,
     /// Bit 0: a direct-light table is bound; bit 1: tables are float16.
     pub flags: u32,
-    /// Constant environment radiance (rgb; a unused).
+    /// Constant environment radiance times the source scale (rgb); the source scale (a), a
+    /// power of two that every emitted radiance is multiplied by to centre values in float16's range.
     pub environment: [f32; 4],
 }
 

@@ -77,6 +77,29 @@ pub struct GpuSolver {
     constants: PassConstants,
     timings: Vec<(String, f64)>,
     fallbacks: Vec<String>,
+    ke_max: f64,
+    environment: DVec3,
+    direct: Option<Table>,
+    scale: f64,
+}
+
+/// Target for the brightest source radiance after scaling: 2^11 leaves 32× headroom below
+/// float16's 65504 for interreflection and accumulation, and keeps intensities down to
+/// ~3e-8 of the brightest source in float16's normal range.
+const SCALED_SOURCE: f64 = 2048.0;
+
+/// Power-of-two scale mapping `brightest` to about [`SCALED_SOURCE`] (exact in binary floats,
+/// so it changes no rounding; the system is linear in its sources).
+pub fn source_scale(brightest: f64) -> f64 {
+    if !(brightest > 0.0 && brightest.is_finite()) {
+        return 1.0;
+    }
+    2f64.powi(
+        (SCALED_SOURCE / brightest)
+            .log2()
+            .round()
+            .clamp(-60.0, 60.0) as i32,
+    )
 }
 
 impl GpuSolver {
@@ -129,6 +152,18 @@ impl GpuSolver {
             constants,
             timings: Vec::new(),
             fallbacks,
+            ke_max: sys
+                .materials
+                .iter()
+                .map(|m| m.ke.max_element())
+                .fold(0.0, f64::max),
+            environment: DVec3::ZERO,
+            direct: None,
+            scale: 1.0,
+        })
+        .and_then(|mut s| {
+            s.update_scale()?;
+            Ok(s)
         })
     }
 
@@ -143,27 +178,57 @@ impl GpuSolver {
     }
 
     /// Constant environment radiance (creates antiradiance, like the CPU solver).
-    pub fn set_environment(&mut self, radiance: DVec3) {
-        self.constants.environment = [radiance.x as f32, radiance.y as f32, radiance.z as f32, 0.0];
+    pub fn set_environment(&mut self, radiance: DVec3) -> Result<()> {
+        self.environment = radiance;
+        self.update_scale()
     }
 
     /// Direct incident radiance per node and bin (reflected only), e.g. from
     /// [`crate::solver::CpuSolver::direct_in`].
     pub fn set_direct(&mut self, table: &Table) -> Result<()> {
-        let l = self.res.layout;
-        let mut img = self.ctx.create_image(
-            "direct light",
-            l.width(),
-            l.rows_per_column,
-            self.res.format,
-        )?;
-        self.ctx
-            .upload_image(&mut img, &encode(self.res.format, &l.from_table(table)))?;
-        let mut old = std::mem::replace(&mut self.res.images.direct, img);
-        self.ctx.destroy_image(&mut old);
-        self.res.update_set(&self.ctx, 0);
-        self.res.update_set(&self.ctx, 1);
-        self.constants.flags |= FLAG_DIRECT;
+        self.direct = Some(table.clone());
+        self.scale = 0.0; // Forces the upload.
+        self.update_scale()
+    }
+
+    /// The power-of-two factor applied to every source (results are divided by it on readback).
+    pub fn scale(&self) -> f64 {
+        self.scale
+    }
+
+    fn update_scale(&mut self) -> Result<()> {
+        let direct_max = self.direct.as_ref().map_or(0.0, |t| {
+            t.data.iter().map(|v| v.max_element()).fold(0.0, f64::max)
+        });
+        let s = source_scale(
+            self.ke_max
+                .max(self.environment.max_element())
+                .max(direct_max),
+        );
+        let e = self.environment * s;
+        self.constants.environment = [e.x as f32, e.y as f32, e.z as f32, s as f32];
+        if s == self.scale {
+            return Ok(());
+        }
+        self.scale = s;
+        if let Some(table) = &self.direct {
+            let l = self.res.layout;
+            let mut scaled = table.clone();
+            scaled.data.iter_mut().for_each(|v| *v *= s);
+            let mut img = self.ctx.create_image(
+                "direct light",
+                l.width(),
+                l.rows_per_column,
+                self.res.format,
+            )?;
+            self.ctx
+                .upload_image(&mut img, &encode(self.res.format, &l.from_table(&scaled)))?;
+            let mut old = std::mem::replace(&mut self.res.images.direct, img);
+            self.ctx.destroy_image(&mut old);
+            self.res.update_set(&self.ctx, 0);
+            self.res.update_set(&self.ctx, 1);
+            self.constants.flags |= FLAG_DIRECT;
+        }
         Ok(())
     }
 
@@ -342,7 +407,7 @@ impl GpuSolver {
             .zip(&cl)
             .map(|(a, b)| [a[0] + b[0], a[1] + b[1], a[2] + b[2], 0.0])
             .collect();
-        Ok(self.res.layout.to_table(&sum))
+        Ok(self.unscale(self.res.layout.to_table(&sum)))
     }
 
     /// Reads I_total back.
@@ -352,7 +417,7 @@ impl GpuSolver {
             self.res.format,
             &ctx.read_image(&mut self.res.images.i_total)?,
         );
-        Ok(self.res.layout.to_table(&t))
+        Ok(self.unscale(self.res.layout.to_table(&t)))
     }
 
     /// Reads the pushed incident radiance back.
@@ -362,7 +427,13 @@ impl GpuSolver {
             self.res.accum_format,
             &ctx.read_image(&mut self.res.images.l_push)?,
         );
-        Ok(self.res.layout.to_table(&t))
+        Ok(self.unscale(self.res.layout.to_table(&t)))
+    }
+
+    fn unscale(&self, mut t: Table) -> Table {
+        let inv = 1.0 / self.scale;
+        t.data.iter_mut().for_each(|v| *v *= inv);
+        t
     }
 
     /// The images a host application reads.
