@@ -17,6 +17,7 @@ pub mod gpu;
 pub mod hierarchy;
 pub mod info;
 pub mod linker;
+pub mod profile;
 pub mod scene;
 pub mod solver;
 pub mod system;

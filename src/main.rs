@@ -43,6 +43,29 @@ enum Command {
         #[arg(long)]
         json: Option<PathBuf>,
     },
+    /// Time the GPU passes (global, push, local, pull) per frame, like the paper's Table 2.
+    Profile {
+        /// Scene TOML (default: the bundled Cornell box).
+        scene: Option<PathBuf>,
+        /// Frames to time after warm-up.
+        #[arg(long, default_value_t = 10)]
+        frames: usize,
+        /// Untimed warm-up frames.
+        #[arg(long, default_value_t = 2)]
+        warmup: usize,
+        /// Override `solver.bins`.
+        #[arg(long)]
+        bins: Option<usize>,
+        /// Override `solver.precision` (f16 | f32).
+        #[arg(long)]
+        precision: Option<String>,
+        /// Write the report as JSON to this file.
+        #[arg(long)]
+        json: Option<PathBuf>,
+        /// Vulkan device whose name contains this (default: prefer a discrete GPU).
+        #[arg(long)]
+        device: Option<String>,
+    },
 }
 
 fn default_scene() -> PathBuf {
@@ -65,6 +88,37 @@ fn load(path: Option<PathBuf>) -> Result<Scene> {
 
 fn main() -> Result<()> {
     match Cli::parse().command {
+        Command::Profile {
+            scene,
+            frames,
+            warmup,
+            bins,
+            precision,
+            json,
+            device,
+        } => {
+            let mut s = load(scene)?;
+            if let Some(b) = bins {
+                s.solver.bins = b;
+            }
+            if let Some(p) = precision {
+                s.solver.precision = match p.as_str() {
+                    "f16" => scene::Precision::F16,
+                    "f32" => scene::Precision::F32,
+                    x => anyhow::bail!("--precision must be f16 or f32, got {x}"),
+                };
+            }
+            let ctx = antiradiance::gpu::Context::headless(&antiradiance::gpu::ContextOptions {
+                validation: false,
+                device_name: device,
+            })?;
+            let report = antiradiance::profile::profile(ctx, &s, frames, warmup)?;
+            print!("{}", report.text());
+            if let Some(p) = json {
+                std::fs::write(&p, serde_json::to_string_pretty(&report)?)
+                    .with_context(|| format!("writing {}", p.display()))?;
+            }
+        }
         Command::Info { scene, json } => {
             let s = load(scene)?;
             let sys = System::build(&s)?;

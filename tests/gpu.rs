@@ -287,3 +287,93 @@ fn default_scene_at_full_settings_matches_cpu() {
     );
     eprintln!("cornell-box full settings, f16: worst {w:.2e}");
 }
+
+/// Engine embedding: the solver runs on a device and queue it does not own and records into a
+/// command buffer the host allocated, begun and submits itself.
+#[test]
+fn embeds_in_a_host_device_and_command_buffer() {
+    use antiradiance::gpu::HostDevice;
+    use ash::vk;
+    let host = context();
+    let embedded = Context::from_host(HostDevice {
+        entry: host.entry.clone(),
+        instance: host.instance.clone(),
+        physical_device: host.physical_device,
+        device: host.device.clone(),
+        queue: host.queue,
+        queue_family: host.queue_family,
+        rectangular_lines: host.line_rasterization_ext(),
+        debug_utils: true,
+    })
+    .unwrap();
+    let scene = small("scenes/cornell-box.toml", 32, 0.5);
+    let sys = System::build(&scene).unwrap();
+    let mut gpu = GpuSolver::new(
+        embedded.clone(),
+        &sys,
+        GpuOptions {
+            precision: Precision::F32,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let d = &host.device;
+    unsafe {
+        let pool = d
+            .create_command_pool(
+                &vk::CommandPoolCreateInfo::default().queue_family_index(host.queue_family),
+                None,
+            )
+            .unwrap();
+        let cmd = d
+            .allocate_command_buffers(
+                &vk::CommandBufferAllocateInfo::default()
+                    .command_pool(pool)
+                    .command_buffer_count(1),
+            )
+            .unwrap()[0];
+        d.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default())
+            .unwrap();
+        gpu.begin_frame(cmd);
+        gpu.record_initialize(cmd).unwrap();
+        for _ in 0..3 {
+            gpu.record_iteration(cmd, Scheme::Symmetric, 4).unwrap();
+        }
+        d.end_command_buffer(cmd).unwrap();
+        let fence = d
+            .create_fence(&vk::FenceCreateInfo::default(), None)
+            .unwrap();
+        let cmds = [cmd];
+        d.queue_submit(
+            host.queue,
+            &[vk::SubmitInfo::default().command_buffers(&cmds)],
+            fence,
+        )
+        .unwrap();
+        d.wait_for_fences(&[fence], true, u64::MAX).unwrap();
+        d.destroy_fence(fence, None);
+        d.destroy_command_pool(pool, None);
+    }
+    let names: Vec<String> = gpu
+        .read_timings()
+        .unwrap()
+        .iter()
+        .map(|t| t.0.clone())
+        .collect();
+    for pass in ["initialize", "global", "push", "local", "pull"] {
+        assert!(
+            names.iter().any(|n| n == pass),
+            "no timed scope `{pass}` in {names:?}"
+        );
+    }
+    assert_eq!(names.iter().filter(|n| *n == "global").count(), 3);
+    let images = gpu.images();
+    assert_ne!(images.i_total.0, vk::Image::null());
+    let mut cpu = CpuSolver::new(&sys);
+    cpu.solve(Scheme::Symmetric, 3, 4);
+    let ex = worst_relative(&sys, &cpu.i_ex, &cpu.i_ex, &gpu.read_i_ex().unwrap(), false);
+    assert!(ex.0 <= 1e-3, "embedded solve off by {:.2e}", ex.0);
+    drop(gpu);
+    drop(embedded);
+    assert_clean(&host);
+}
