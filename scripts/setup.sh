@@ -14,6 +14,6 @@ if [ ${#missing[@]} -gt 0 ]; then
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "${missing[@]}"
 fi
 if ! command -v cargo >/dev/null 2>&1; then
-  echo "setup: cargo not found; install a Rust toolchain >= 1.80 (rustup) and re-run" >&2
+  echo "setup: cargo not found; install a Rust toolchain >= 1.82 (rustup) and re-run" >&2
   exit 1
 fi

@@ -147,7 +147,12 @@ mod tests {
             .unwrap_or_else(|| panic!("{name} missing"));
         let body = &COMMON[start..];
         let body = &body[body.find('{').unwrap() + 1..body.find('}').unwrap()];
-        body.split(';')
+        let code: String = body
+            .lines()
+            .map(|l| l.split("//").next().unwrap_or(""))
+            .collect::<Vec<_>>()
+            .join("\n");
+        code.split(';')
             .filter_map(|f| f.split_whitespace().last().map(str::to_string))
             .collect()
     }

@@ -91,7 +91,7 @@ const SCALED_SOURCE: f64 = 2048.0;
 /// Power-of-two scale mapping `brightest` to about [`SCALED_SOURCE`] (exact in binary floats,
 /// so it changes no rounding; the system is linear in its sources).
 pub fn source_scale(brightest: f64) -> f64 {
-    if !(brightest > 0.0 && brightest.is_finite()) {
+    if !brightest.is_finite() || brightest <= 0.0 {
         return 1.0;
     }
     2f64.powi(
