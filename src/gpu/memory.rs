@@ -52,11 +52,27 @@ impl Image {
     }
 }
 
-fn alloc_err(what: &str, e: gpu_allocator::AllocationError) -> Error {
-    Error::Device(format!("allocating {what}: {e}"))
-}
-
 impl Context {
+    fn allocate(
+        &self,
+        name: &str,
+        requirements: vk::MemoryRequirements,
+        location: MemoryLocation,
+        linear: bool,
+    ) -> Result<Allocation> {
+        self.allocator
+            .lock()
+            .map_err(|_| Error::Device("allocator lock poisoned".into()))?
+            .allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location,
+                linear,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            })
+            .map_err(|e| Error::Device(format!("allocating {name}: {e}")))
+    }
+
     /// Creates a buffer in `location`.
     pub fn create_buffer(
         &self,
@@ -77,20 +93,8 @@ impl Context {
         .vk(name)?;
         let requirements = unsafe { d.get_buffer_memory_requirements(raw) };
         let allocation = self
-            .allocator
-            .lock()
-            .map_err(|_| Error::Device("allocator lock poisoned".into()))?
-            .allocate(&AllocationCreateDesc {
-                name,
-                requirements,
-                location,
-                linear: true,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            })
-            .map_err(|e| {
-                unsafe { d.destroy_buffer(raw, None) };
-                alloc_err(name, e)
-            })?;
+            .allocate(name, requirements, location, true)
+            .inspect_err(|_| unsafe { d.destroy_buffer(raw, None) })?;
         unsafe { d.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }.vk(name)?;
         self.name(raw, name);
         Ok(Buffer {
@@ -178,20 +182,8 @@ impl Context {
         .vk(name)?;
         let requirements = unsafe { d.get_image_memory_requirements(raw) };
         let allocation = self
-            .allocator
-            .lock()
-            .map_err(|_| Error::Device("allocator lock poisoned".into()))?
-            .allocate(&AllocationCreateDesc {
-                name,
-                requirements,
-                location: MemoryLocation::GpuOnly,
-                linear: false,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            })
-            .map_err(|e| {
-                unsafe { d.destroy_image(raw, None) };
-                alloc_err(name, e)
-            })?;
+            .allocate(name, requirements, MemoryLocation::GpuOnly, false)
+            .inspect_err(|_| unsafe { d.destroy_image(raw, None) })?;
         unsafe { d.bind_image_memory(raw, allocation.memory(), allocation.offset()) }.vk(name)?;
         let view = unsafe {
             d.create_image_view(

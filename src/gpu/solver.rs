@@ -4,10 +4,11 @@
 use super::context::Context;
 use super::diagnostics::BlendRounding;
 use super::layout::{mode, PassConstants, FLAG_DIRECT, FLAG_HALF};
+use super::memory::Image;
 use super::passes::{self, Pass, Pipelines};
 use super::pipelines::Layouts;
 use super::profiler::Profiler;
-use super::resources::{decode, encode, MemoryReport, Resources};
+use super::resources::{decode, encode, Images, MemoryReport, Resources};
 use crate::error::Result;
 use crate::scene::{Precision, Scheme};
 use crate::solver::{LocalMode, Table};
@@ -390,18 +391,20 @@ impl GpuSolver {
         Ok(&self.timings)
     }
 
+    fn read_texels(
+        &mut self,
+        pick: impl FnOnce(&mut Images) -> &mut Image,
+    ) -> Result<Vec<[f32; 4]>> {
+        let ctx = self.ctx.clone();
+        let img = pick(&mut self.res.images);
+        Ok(decode(img.format, &ctx.read_image(img)?))
+    }
+
     /// Reads I_ex (leaves + clusters) back as a table.
     pub fn read_i_ex(&mut self) -> Result<Table> {
         let p = self.parity;
-        let ctx = self.ctx.clone();
-        let leaf = decode(
-            self.res.format,
-            &ctx.read_image(&mut self.res.images.leaf_ex[p])?,
-        );
-        let cl = decode(
-            super::resources::CLUSTER_FORMAT,
-            &ctx.read_image(&mut self.res.images.cluster_ex)?,
-        );
+        let leaf = self.read_texels(|im| &mut im.leaf_ex[p])?;
+        let cl = self.read_texels(|im| &mut im.cluster_ex)?;
         let sum: Vec<[f32; 4]> = leaf
             .iter()
             .zip(&cl)
@@ -412,21 +415,13 @@ impl GpuSolver {
 
     /// Reads I_total back.
     pub fn read_i_total(&mut self) -> Result<Table> {
-        let ctx = self.ctx.clone();
-        let t = decode(
-            self.res.format,
-            &ctx.read_image(&mut self.res.images.i_total)?,
-        );
+        let t = self.read_texels(|im| &mut im.i_total)?;
         Ok(self.unscale(self.res.layout.to_table(&t)))
     }
 
     /// Reads the pushed incident radiance back.
     pub fn read_l_push(&mut self) -> Result<Table> {
-        let ctx = self.ctx.clone();
-        let t = decode(
-            self.res.accum_format,
-            &ctx.read_image(&mut self.res.images.l_push)?,
-        );
+        let t = self.read_texels(|im| &mut im.l_push)?;
         Ok(self.unscale(self.res.layout.to_table(&t)))
     }
 
