@@ -86,6 +86,37 @@ fn load(path: Option<PathBuf>) -> Result<Scene> {
     Ok(s)
 }
 
+/// Command-line flags override the scene's `[solver]` settings.
+fn apply_overrides(
+    s: &mut Scene,
+    iterations: Option<usize>,
+    bins: Option<usize>,
+    scheme: Option<String>,
+    precision: Option<String>,
+) -> Result<()> {
+    if let Some(i) = iterations {
+        s.solver.iterations = i.max(1);
+    }
+    if let Some(b) = bins {
+        s.solver.bins = b;
+    }
+    if let Some(sc) = scheme {
+        s.solver.scheme = match sc.as_str() {
+            "symmetric" => scene::Scheme::Symmetric,
+            "asymmetric" => scene::Scheme::Asymmetric,
+            x => anyhow::bail!("--scheme must be symmetric or asymmetric, got {x}"),
+        };
+    }
+    if let Some(p) = precision {
+        s.solver.precision = match p.as_str() {
+            "f16" => scene::Precision::F16,
+            "f32" => scene::Precision::F32,
+            x => anyhow::bail!("--precision must be f16 or f32, got {x}"),
+        };
+    }
+    Ok(())
+}
+
 fn main() -> Result<()> {
     match Cli::parse().command {
         Command::Profile {
@@ -98,16 +129,7 @@ fn main() -> Result<()> {
             device,
         } => {
             let mut s = load(scene)?;
-            if let Some(b) = bins {
-                s.solver.bins = b;
-            }
-            if let Some(p) = precision {
-                s.solver.precision = match p.as_str() {
-                    "f16" => scene::Precision::F16,
-                    "f32" => scene::Precision::F32,
-                    x => anyhow::bail!("--precision must be f16 or f32, got {x}"),
-                };
-            }
+            apply_overrides(&mut s, None, bins, None, precision)?;
             let ctx = antiradiance::gpu::Context::headless(&antiradiance::gpu::ContextOptions {
                 validation: false,
                 device_name: device,
@@ -137,19 +159,7 @@ fn main() -> Result<()> {
             json,
         } => {
             let mut s = load(scene)?;
-            if let Some(i) = iterations {
-                s.solver.iterations = i.max(1);
-            }
-            if let Some(b) = bins {
-                s.solver.bins = b;
-            }
-            if let Some(sc) = scheme {
-                s.solver.scheme = match sc.as_str() {
-                    "symmetric" => scene::Scheme::Symmetric,
-                    "asymmetric" => scene::Scheme::Asymmetric,
-                    x => anyhow::bail!("--scheme must be symmetric or asymmetric, got {x}"),
-                };
-            }
+            apply_overrides(&mut s, iterations, bins, scheme, None)?;
             let sys = System::build(&s)?;
             let info = Info::new(&s, &sys);
             eprint!("{}", info.text());

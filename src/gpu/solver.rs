@@ -188,13 +188,42 @@ impl GpuSolver {
     /// [`crate::solver::CpuSolver::direct_in`].
     pub fn set_direct(&mut self, table: &Table) -> Result<()> {
         self.direct = Some(table.clone());
-        self.scale = 0.0; // Forces the upload.
-        self.update_scale()
+        let before = self.scale;
+        self.update_scale()?;
+        // update_scale uploads it when the scale changes; otherwise upload it here, once.
+        if self.scale == before {
+            self.upload_direct()?;
+        }
+        Ok(())
     }
 
     /// The power-of-two factor applied to every source (results are divided by it on readback).
     pub fn scale(&self) -> f64 {
         self.scale
+    }
+
+    /// Uploads the direct-light table at the current source scale (no-op without one).
+    fn upload_direct(&mut self) -> Result<()> {
+        let Some(table) = &self.direct else {
+            return Ok(());
+        };
+        let l = self.res.layout;
+        let mut scaled = table.clone();
+        scaled.data.iter_mut().for_each(|v| *v *= self.scale);
+        let mut img = self.ctx.create_image(
+            "direct light",
+            l.width(),
+            l.rows_per_column,
+            self.res.format,
+        )?;
+        self.ctx
+            .upload_image(&mut img, &encode(self.res.format, &l.from_table(&scaled)))?;
+        let mut old = std::mem::replace(&mut self.res.images.direct, img);
+        self.ctx.destroy_image(&mut old);
+        self.res.update_set(&self.ctx, 0);
+        self.res.update_set(&self.ctx, 1);
+        self.constants.flags |= FLAG_DIRECT;
+        Ok(())
     }
 
     fn update_scale(&mut self) -> Result<()> {
@@ -208,27 +237,9 @@ impl GpuSolver {
         );
         let e = self.environment * s;
         self.constants.environment = [e.x as f32, e.y as f32, e.z as f32, s as f32];
-        if s == self.scale {
-            return Ok(());
-        }
-        self.scale = s;
-        if let Some(table) = &self.direct {
-            let l = self.res.layout;
-            let mut scaled = table.clone();
-            scaled.data.iter_mut().for_each(|v| *v *= s);
-            let mut img = self.ctx.create_image(
-                "direct light",
-                l.width(),
-                l.rows_per_column,
-                self.res.format,
-            )?;
-            self.ctx
-                .upload_image(&mut img, &encode(self.res.format, &l.from_table(&scaled)))?;
-            let mut old = std::mem::replace(&mut self.res.images.direct, img);
-            self.ctx.destroy_image(&mut old);
-            self.res.update_set(&self.ctx, 0);
-            self.res.update_set(&self.ctx, 1);
-            self.constants.flags |= FLAG_DIRECT;
+        if s != self.scale {
+            self.scale = s;
+            self.upload_direct()?;
         }
         Ok(())
     }
