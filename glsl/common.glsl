@@ -27,6 +27,58 @@
 #define AR_FLAG_DIRECT 1u
 #define AR_FLAG_HALF 2u
 
+struct Material {
+    vec4 kd;
+    vec4 ks_ns;
+    vec4 ke;
+};
+
+const float AR_PI = 3.14159265358979;
+
+#ifdef AR_FRAME_PASS
+// Frame passes (shadow maps, G-buffer, splat, compose): src/gpu/frame.rs.
+#define AR_FRAME_I_TOTAL 0
+#define AR_FRAME_MATERIALS 1
+#define AR_FRAME_BIN_CENTERS 2
+#define AR_FRAME_ELEMENTS 3
+#define AR_FRAME_ADJ_OFFSETS 4
+#define AR_FRAME_ADJ_LIST 5
+#define AR_FRAME_LIGHTS 6
+#define AR_FRAME_SHADOW_VIEWS 7
+#define AR_FRAME_SHADOW_MAP 8
+#define AR_FRAME_GBUF_POSITION 9
+#define AR_FRAME_GBUF_VERTEX 10
+#define AR_FRAME_SPLAT 11
+
+layout(push_constant) uniform FrameConstants {
+    mat4 view_proj;   // camera, or the shadow view being drawn
+    vec4 eye;         // xyz eye; w = 1 / source scale
+    vec4 environment; // rgb radiance where camera rays escape
+    uvec4 sizes;      // target width, height, bins, rows per column block
+    uvec4 misc;       // light count, shadow view, shadow map side, supersampling
+} pc;
+
+struct ShadowView {
+    mat4 view_proj;
+    vec4 origin;   // w: 1 orthographic, 0 perspective
+    vec4 forward;  // w: half side / tan(fov/2)
+};
+
+struct Light {
+    uvec4 kind_views;  // kind (0 directional, 1 point, 2 spot), first view, view count
+    vec4 position;
+    vec4 direction;    // travel direction / spot axis
+    vec4 power;        // rgb irradiance or intensity; w spot cut-off (radians)
+    vec4 params;       // x spot beam width (radians)
+};
+
+struct FrameElement {
+    vec4 center_radius;
+    vec4 normal_area;
+    uvec4 ids;         // table row, surface id, mode (0 splat, 1 vertex), material
+    vec4 cos_norm;
+};
+#else
 layout(push_constant) uniform PassConstants {
     uint bins;
     uint rows_per_column;
@@ -39,13 +91,6 @@ layout(push_constant) uniform PassConstants {
     vec4 environment;  // rgb: environment radiance (scaled); a: source scale (a power of two)
 } pc;
 
-struct Material {
-    vec4 kd;
-    vec4 ks_ns;
-    vec4 ke;
-};
-
-const float AR_PI = 3.14159265358979;
 
 ivec2 ar_texel(uint row, uint bin) {
     return ivec2((row / pc.rows_per_column) * pc.bins + bin, row % pc.rows_per_column);
@@ -84,5 +129,6 @@ vec3 ar_store(vec3 v) {
 vec4 ar_clip(vec2 p) {
     return vec4(p / vec2(pc.target_width, pc.target_height) * 2.0 - 1.0, 0.0, 1.0);
 }
+#endif  // AR_FRAME_PASS
 
 #endif

@@ -58,6 +58,14 @@ pub enum Error {
     /// The Vulkan device or driver lacks something the GPU solver needs.
     #[error("Vulkan device: {0}")]
     Device(String),
+    /// An output file could not be written (or an image file read).
+    #[error("{path}: {message}")]
+    Output {
+        /// File.
+        path: PathBuf,
+        /// What went wrong.
+        message: String,
+    },
     /// A GLSL shader failed to compile; the message names the file and line.
     #[error("shader {file}: {message}")]
     Shader {

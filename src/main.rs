@@ -1,6 +1,6 @@
 //! `antiradiance` command-line tool: parses arguments and calls the library.
 
-use antiradiance::{info::Info, scene, CpuSolver, Scene, System};
+use antiradiance::{info::Info, render, scene, Scene, System};
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 use std::path::{Path, PathBuf};
@@ -26,22 +26,49 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// Solve the scene with the CPU reference solver and report residuals.
+    /// Render the scene from its camera to PNG and/or EXR (default: out.png).
     Render {
         /// Scene TOML (default: the bundled Cornell box).
         scene: Option<PathBuf>,
-        /// Override `solver.iterations`.
+        /// PNG output (tone-mapped sRGB); written when given, or when no --exr is given.
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// EXR output (linear float RGB radiance).
         #[arg(long)]
-        iterations: Option<usize>,
-        /// Override `solver.bins`.
-        #[arg(long)]
-        bins: Option<usize>,
-        /// Override `solver.scheme` (symmetric | asymmetric).
-        #[arg(long)]
-        scheme: Option<String>,
+        exr: Option<PathBuf>,
         /// Write statistics as JSON to this file.
         #[arg(long)]
         json: Option<PathBuf>,
+        /// Override `solver.bins`.
+        #[arg(long)]
+        bins: Option<usize>,
+        /// Override `solver.iterations`.
+        #[arg(long)]
+        iterations: Option<usize>,
+        /// Override `solver.scheme` (symmetric | asymmetric).
+        #[arg(long)]
+        scheme: Option<String>,
+        /// Override `solver.precision` (f16 | f32).
+        #[arg(long)]
+        precision: Option<String>,
+        /// Override `camera.width`.
+        #[arg(long)]
+        width: Option<u32>,
+        /// Override `camera.height`.
+        #[arg(long)]
+        height: Option<u32>,
+        /// PNG exposure in stops (pixel values are multiplied by 2^exposure).
+        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+        exposure: f64,
+        /// gpu (Vulkan raster passes) or cpu (the f64 reference solver and a ray-cast frame).
+        #[arg(long, default_value = "gpu")]
+        backend: String,
+        /// Shadow map side in texels.
+        #[arg(long, default_value_t = 1024)]
+        shadow_map_size: u32,
+        /// Vulkan device whose name contains this (default: prefer a discrete GPU).
+        #[arg(long)]
+        device: Option<String>,
     },
     /// Time the GPU passes (global, push, local, pull) per frame, like the paper's Table 2.
     Profile {
@@ -66,6 +93,35 @@ enum Command {
         #[arg(long)]
         device: Option<String>,
     },
+}
+
+/// Progress bars on stderr for the library's long steps.
+#[derive(Default)]
+struct Bars(std::cell::RefCell<Option<indicatif::ProgressBar>>);
+
+impl render::Progress for Bars {
+    fn begin(&self, step: &str, total: u64) {
+        let bar = indicatif::ProgressBar::new(total).with_message(step.to_string());
+        bar.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{msg:>12} [{bar:30}] {pos}/{len} {elapsed_precise} (eta {eta})",
+            )
+            .expect("static template")
+            .progress_chars("=> "),
+        );
+        bar.enable_steady_tick(std::time::Duration::from_millis(200));
+        *self.0.borrow_mut() = Some(bar);
+    }
+    fn advance(&self, n: u64) {
+        if let Some(b) = self.0.borrow().as_ref() {
+            b.inc(n);
+        }
+    }
+    fn end(&self) {
+        if let Some(b) = self.0.borrow_mut().take() {
+            b.finish();
+        }
+    }
 }
 
 fn default_scene() -> PathBuf {
@@ -153,41 +209,67 @@ fn main() -> Result<()> {
         }
         Command::Render {
             scene,
-            iterations,
-            bins,
-            scheme,
+            output,
+            exr,
             json,
+            bins,
+            iterations,
+            scheme,
+            precision,
+            width,
+            height,
+            exposure,
+            backend,
+            shadow_map_size,
+            device,
         } => {
             let mut s = load(scene)?;
-            apply_overrides(&mut s, iterations, bins, scheme, None)?;
-            let sys = System::build(&s)?;
-            let info = Info::new(&s, &sys);
-            eprint!("{}", info.text());
-            let t0 = std::time::Instant::now();
-            let mut solver = CpuSolver::new(&sys);
-            solver.set_environment(s.environment);
-            solver.solve(
-                s.solver.scheme,
-                s.solver.iterations,
-                s.solver.antiradiance_steps,
-            );
-            let solve_ms = t0.elapsed().as_secs_f64() * 1e3;
-            for (i, (r, e)) in solver.residuals.iter().zip(&solver.energies).enumerate() {
-                eprintln!(
-                    "iteration {:>3}: residual {r:.3e}, exitant flux {e:.4e} W",
-                    i + 1
-                );
+            apply_overrides(&mut s, iterations, bins, scheme, precision)?;
+            if let Some(w) = width {
+                anyhow::ensure!((1..=16384).contains(&w), "--width must be 1..=16384");
+                s.camera.width = w;
             }
-            eprintln!("CPU solve {solve_ms:.1} ms (images arrive with the frame issue)");
+            if let Some(h) = height {
+                anyhow::ensure!((1..=16384).contains(&h), "--height must be 1..=16384");
+                s.camera.height = h;
+            }
+            let backend = match backend.as_str() {
+                "gpu" => render::Backend::Gpu,
+                "cpu" => render::Backend::Cpu,
+                x => anyhow::bail!("--backend must be gpu or cpu, got {x}"),
+            };
+            anyhow::ensure!(
+                (16..=8192).contains(&shadow_map_size),
+                "--shadow-map-size must be 16..=8192"
+            );
+            let opts = render::RenderOptions {
+                backend,
+                shadow_map_size,
+                device,
+                validation: false,
+            };
+            let r = render::render(&s, &opts, &Bars::default())?;
+            for f in &r.stats.fallbacks {
+                eprintln!("fallback: {f}");
+            }
+            for (i, res) in r.stats.residuals.iter().enumerate() {
+                eprintln!("iteration {:>3}: residual {res:.3e}", i + 1);
+            }
+            eprintln!(
+                "{} elements, {} links, {} bins on {}; {:.0} ms in all",
+                r.stats.elements, r.stats.links, r.stats.bins, r.stats.device, r.stats.total_ms
+            );
+            if let Some(p) = &exr {
+                r.image.write_exr(p)?;
+                eprintln!("wrote {}", p.display());
+            }
+            if output.is_some() || exr.is_none() {
+                let p = output.unwrap_or_else(|| PathBuf::from("out.png"));
+                r.image.write_png(&p, exposure)?;
+                eprintln!("wrote {}", p.display());
+            }
             if let Some(p) = json {
-                let v = serde_json::json!({
-                    "elements": info.elements, "links": info.links, "bins": info.bins,
-                    "iterations": s.solver.iterations, "linking_ms": info.linking_ms,
-                    "total_ms": solve_ms + info.linking_ms + info.meshing_ms,
-                    "passes": { "cpu_solve": solve_ms }, "residuals": solver.residuals,
-                    "fallbacks": Vec::<String>::new(),
-                });
-                std::fs::write(&p, serde_json::to_string_pretty(&v)?)
+                std::fs::write(&p, serde_json::to_string_pretty(&r.stats)?)
                     .with_context(|| format!("writing {}", p.display()))?;
             }
         }

@@ -2,7 +2,7 @@
 //! [`transition`] emits the synchronization2 barrier from the image's last use.
 
 use super::context::Context;
-use super::memory::{color_range, Image};
+use super::memory::{range_for, Image};
 use ash::vk;
 
 /// How an image is used next (decides layout, stage and access mask).
@@ -12,6 +12,8 @@ pub enum Access {
     Undefined,
     /// Color attachment written (and blended) by a draw.
     Attachment,
+    /// Depth attachment tested and written by a draw.
+    Depth,
     /// Read by fragment or vertex shaders with `texelFetch`.
     Sampled,
     /// Source of a copy (readback).
@@ -25,6 +27,7 @@ impl Access {
         match self {
             Access::Undefined => vk::ImageLayout::UNDEFINED,
             Access::Attachment => vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
+            Access::Depth => vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
             Access::Sampled => vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
             Access::TransferSrc => vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
             Access::TransferDst => vk::ImageLayout::TRANSFER_DST_OPTIMAL,
@@ -37,6 +40,12 @@ impl Access {
             Access::Attachment => (
                 vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
                 vk::AccessFlags2::COLOR_ATTACHMENT_READ | vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
+            ),
+            Access::Depth => (
+                vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS
+                    | vk::PipelineStageFlags2::LATE_FRAGMENT_TESTS,
+                vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_READ
+                    | vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE,
             ),
             Access::Sampled => (
                 vk::PipelineStageFlags2::VERTEX_SHADER | vk::PipelineStageFlags2::FRAGMENT_SHADER,
@@ -76,7 +85,7 @@ pub fn transition(ctx: &Context, cmd: vk::CommandBuffer, images: &mut [(&mut Ima
                 .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
                 .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
                 .image(img.raw)
-                .subresource_range(color_range()),
+                .subresource_range(range_for(img.format)),
         );
         img.access = *next;
     }

@@ -87,6 +87,8 @@ fn draw_lines(
                 write: true,
             }],
             mode: None,
+            per_vertex: false,
+            depth: false,
         },
     )?;
     let mut buf = ctx.upload_buffer(

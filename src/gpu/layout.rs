@@ -83,6 +83,26 @@ pub struct GpuMaterial {
     pub ke: [f32; 4],
 }
 
+impl GpuMaterial {
+    /// The shader record of `m`.
+    pub fn new(m: &crate::scene::Material) -> Self {
+        let v = |v: glam::DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
+        Self {
+            kd: v(m.kd, 0.0),
+            ks_ns: v(m.ks, m.ns),
+            ke: v(m.ke, 0.0),
+        }
+    }
+}
+
+/// Bin center directions as the `vec4` records of the bin-centers storage buffer.
+pub fn bin_centers(bins: &crate::bins::Bins) -> Vec<[f32; 4]> {
+    bins.centers
+        .iter()
+        .map(|c| [c.x as f32, c.y as f32, c.z as f32, 0.0])
+        .collect()
+}
+
 /// Descriptor bindings of the solver's one set layout (`AR_BINDING_*` in common.glsl).
 pub mod binding {
     /// Leaves' I_ex, current (read by global and local).
@@ -115,6 +135,117 @@ pub mod binding {
     pub const COUNT: u32 = 13;
     /// Storage-buffer bindings (the rest are combined image samplers).
     pub const BUFFERS: [u32; 2] = [MATERIALS, BIN_CENTERS];
+}
+
+/// Push constants of the frame passes (`FrameConstants` in common.glsl, 128 bytes: the
+/// guaranteed minimum of `maxPushConstantsSize`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct FrameConstants {
+    /// World → clip of the camera, or of the shadow view being drawn (column-major).
+    pub view_proj: [[f32; 4]; 4],
+    /// Eye position (xyz); 1 / source scale (w), to undo the solver's scale on I_total.
+    pub eye: [f32; 4],
+    /// Environment radiance seen where camera rays escape (rgb).
+    pub environment: [f32; 4],
+    /// Target width, target height, bins `m`, rows per column block of I_total.
+    pub sizes: [u32; 4],
+    /// Light count, shadow view being drawn, shadow map side, supersampling per axis.
+    pub misc: [u32; 4],
+}
+
+/// One shadow-map view (`ShadowView` in common.glsl; mirrors [`crate::frame::shadow::ShadowView`]).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct GpuShadowView {
+    /// World → clip (column-major).
+    pub view_proj: [[f32; 4]; 4],
+    /// Origin (xyz); 1 for orthographic, 0 for perspective (w).
+    pub origin: [f32; 4],
+    /// Unit axis (xyz); half side or tan(fov/2) (w).
+    pub forward: [f32; 4],
+}
+
+/// One analytic light (`Light` in common.glsl).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct GpuLight {
+    /// Kind (0 directional, 1 point, 2 spot), first shadow view, view count, unused.
+    pub kind_views: [u32; 4],
+    /// Position (xyz).
+    pub position: [f32; 4],
+    /// Travel direction (directional) or spot axis (xyz).
+    pub direction: [f32; 4],
+    /// Irradiance (directional) or intensity (rgb); spot cut-off in radians (w).
+    pub power: [f32; 4],
+    /// Spot beam width in radians (x).
+    pub params: [f32; 4],
+}
+
+/// Per-leaf data of the frame passes (`FrameElement` in common.glsl), in leaf-slot order.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct GpuFrameElement {
+    /// Center (xyz), splat radius (w).
+    pub center_radius: [f32; 4],
+    /// Unit normal (xyz), area (w).
+    pub normal_area: [f32; 4],
+    /// Table row, flat-surface id, shading mode, material index.
+    pub ids: [u32; 4],
+    /// Cosine normalization (x).
+    pub cos_norm: [f32; 4],
+}
+
+/// One element corner as vertex input of the shadow and G-buffer passes (20 bytes).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct CornerVertex {
+    /// World position.
+    pub position: [f32; 3],
+    /// Leaf slot of the element.
+    pub leaf: u32,
+    /// Shared vertex (vertex-interpolated elements) or `u32::MAX`.
+    pub vertex: u32,
+}
+
+/// Descriptor bindings of the frame passes (`AR_FRAME_*` in common.glsl).
+pub mod frame_binding {
+    /// I_total table (sampled).
+    pub const I_TOTAL: u32 = 0;
+    /// Materials (storage).
+    pub const MATERIALS: u32 = 1;
+    /// Bin centers (storage).
+    pub const BIN_CENTERS: u32 = 2;
+    /// Frame elements (storage).
+    pub const ELEMENTS: u32 = 3;
+    /// Shared-vertex CSR offsets (storage).
+    pub const ADJ_OFFSETS: u32 = 4;
+    /// Shared-vertex leaf lists (storage).
+    pub const ADJ_LIST: u32 = 5;
+    /// Lights (storage).
+    pub const LIGHTS: u32 = 6;
+    /// Shadow views (storage).
+    pub const SHADOW_VIEWS: u32 = 7;
+    /// Shadow maps, views stacked vertically (sampled R32F).
+    pub const SHADOW_MAP: u32 = 8;
+    /// G-buffer: position (xyz), leaf slot + 1 as bits (w); 0 = background.
+    pub const GBUF_POSITION: u32 = 9;
+    /// G-buffer: vertex-interpolated indirect radiance.
+    pub const GBUF_VERTEX: u32 = 10;
+    /// Splat accumulation: Σ w·L (rgb), Σ w (a).
+    pub const SPLAT: u32 = 11;
+    /// Number of bindings.
+    pub const COUNT: u32 = 12;
+    /// Storage-buffer bindings (the rest are combined image samplers).
+    pub const BUFFERS: [u32; 7] = [
+        MATERIALS,
+        BIN_CENTERS,
+        ELEMENTS,
+        ADJ_OFFSETS,
+        ADJ_LIST,
+        LIGHTS,
+        SHADOW_VIEWS,
+    ];
 }
 
 /// Local-pass mode specialization constant (`AR_MODE` in common.glsl, constant_id 0).
@@ -187,6 +318,57 @@ mod tests {
         assert_eq!(size_of::<GpuMaterial>(), 48);
         assert_eq!(offset_of!(GpuMaterial, ke), 32);
         assert_eq!(glsl_fields("Material"), ["kd", "ks_ns", "ke"]);
+    }
+
+    #[test]
+    fn frame_records_match_glsl() {
+        assert_eq!(size_of::<FrameConstants>(), 128);
+        assert_eq!(offset_of!(FrameConstants, eye), 64);
+        assert_eq!(offset_of!(FrameConstants, misc), 112);
+        assert_eq!(
+            glsl_fields("FrameConstants"),
+            ["view_proj", "eye", "environment", "sizes", "misc"]
+        );
+        assert_eq!(size_of::<GpuShadowView>(), 96);
+        assert_eq!(
+            glsl_fields("ShadowView"),
+            ["view_proj", "origin", "forward"]
+        );
+        assert_eq!(size_of::<GpuLight>(), 80);
+        assert_eq!(
+            glsl_fields("Light"),
+            ["kind_views", "position", "direction", "power", "params"]
+        );
+        assert_eq!(size_of::<GpuFrameElement>(), 64);
+        assert_eq!(
+            glsl_fields("FrameElement"),
+            ["center_radius", "normal_area", "ids", "cos_norm"]
+        );
+        assert_eq!(size_of::<CornerVertex>(), 20);
+        assert_eq!(offset_of!(CornerVertex, vertex), 16);
+        let names = [
+            "I_TOTAL",
+            "MATERIALS",
+            "BIN_CENTERS",
+            "ELEMENTS",
+            "ADJ_OFFSETS",
+            "ADJ_LIST",
+            "LIGHTS",
+            "SHADOW_VIEWS",
+            "SHADOW_MAP",
+            "GBUF_POSITION",
+            "GBUF_VERTEX",
+            "SPLAT",
+        ];
+        assert_eq!(names.len() as u32, frame_binding::COUNT);
+        for (value, name) in names.iter().enumerate() {
+            let line = format!("#define AR_FRAME_{name} {value}\n");
+            assert!(
+                COMMON.contains(&line),
+                "common.glsl lacks `{}`",
+                line.trim()
+            );
+        }
     }
 
     #[test]

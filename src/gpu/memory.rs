@@ -40,7 +40,7 @@ impl Image {
         match format {
             vk::Format::R16G16B16A16_SFLOAT => 8,
             vk::Format::R32G32B32A32_SFLOAT => 16,
-            vk::Format::R32_SFLOAT => 4,
+            vk::Format::R32_SFLOAT | vk::Format::D32_SFLOAT => 4,
             vk::Format::R16_SFLOAT => 2,
             _ => 16,
         }
@@ -150,7 +150,8 @@ impl Context {
         Ok(s)
     }
 
-    /// Creates a sampled color-attachment image of `width × height` texels.
+    /// Creates a sampled color-attachment image of `width × height` texels (or, for
+    /// [`DEPTH_FORMAT`], a depth attachment).
     pub fn create_image(
         &self,
         name: &str,
@@ -159,10 +160,14 @@ impl Context {
         format: vk::Format,
     ) -> Result<Image> {
         let d = &self.device;
-        let usage = vk::ImageUsageFlags::COLOR_ATTACHMENT
-            | vk::ImageUsageFlags::SAMPLED
-            | vk::ImageUsageFlags::TRANSFER_SRC
-            | vk::ImageUsageFlags::TRANSFER_DST;
+        let usage = if format == DEPTH_FORMAT {
+            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT
+        } else {
+            vk::ImageUsageFlags::COLOR_ATTACHMENT
+                | vk::ImageUsageFlags::SAMPLED
+                | vk::ImageUsageFlags::TRANSFER_SRC
+                | vk::ImageUsageFlags::TRANSFER_DST
+        };
         let extent = vk::Extent2D { width, height };
         let raw = unsafe {
             d.create_image(
@@ -191,7 +196,7 @@ impl Context {
                     .image(raw)
                     .view_type(vk::ImageViewType::TYPE_2D)
                     .format(format)
-                    .subresource_range(color_range()),
+                    .subresource_range(range_for(format)),
                 None,
             )
         }
@@ -291,10 +296,17 @@ impl Context {
     }
 }
 
-/// The single color subresource of our images.
-pub fn color_range() -> vk::ImageSubresourceRange {
+/// Format of depth attachments (frame and shadow-map passes).
+pub const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+
+/// The single subresource of an image of `format` (depth aspect for [`DEPTH_FORMAT`]).
+pub fn range_for(format: vk::Format) -> vk::ImageSubresourceRange {
     vk::ImageSubresourceRange {
-        aspect_mask: vk::ImageAspectFlags::COLOR,
+        aspect_mask: if format == DEPTH_FORMAT {
+            vk::ImageAspectFlags::DEPTH
+        } else {
+            vk::ImageAspectFlags::COLOR
+        },
         base_mip_level: 0,
         level_count: 1,
         base_array_layer: 0,

@@ -5,6 +5,7 @@
 pub mod barrier;
 pub mod context;
 pub mod diagnostics;
+pub mod frame;
 pub mod layout;
 pub mod memory;
 pub mod passes;

@@ -38,6 +38,10 @@ pub struct PipelineDesc<'a> {
     pub targets: &'a [Target],
     /// Value of specialization constant 0 (the local-pass mode), if the shader has it.
     pub mode: Option<u32>,
+    /// Vertex records advance per vertex (true) or per instance (false, the solver's passes).
+    pub per_vertex: bool,
+    /// Depth test (less) and write against a [`super::memory::DEPTH_FORMAT`] attachment.
+    pub depth: bool,
 }
 
 /// The shared layouts.
@@ -49,17 +53,40 @@ pub struct Layouts {
 }
 
 impl Layouts {
-    /// Creates the layouts.
+    /// Creates the solver's layouts.
     pub fn new(ctx: &Context) -> Result<Self> {
-        let bindings: Vec<_> = (0..binding::COUNT)
+        let kinds: Vec<_> = (0..binding::COUNT)
             .map(|b| {
+                if binding::BUFFERS.contains(&b) {
+                    vk::DescriptorType::STORAGE_BUFFER
+                } else {
+                    vk::DescriptorType::COMBINED_IMAGE_SAMPLER
+                }
+            })
+            .collect();
+        Self::with(
+            ctx,
+            "antiradiance",
+            &kinds,
+            std::mem::size_of::<PassConstants>() as u32,
+        )
+    }
+
+    /// A set layout with binding `i` of type `kinds[i]` and a pipeline layout with that set and
+    /// `push_bytes` of push constants (vertex + fragment stages).
+    pub fn with(
+        ctx: &Context,
+        name: &str,
+        kinds: &[vk::DescriptorType],
+        push_bytes: u32,
+    ) -> Result<Self> {
+        let bindings: Vec<_> = kinds
+            .iter()
+            .enumerate()
+            .map(|(b, &kind)| {
                 vk::DescriptorSetLayoutBinding::default()
-                    .binding(b)
-                    .descriptor_type(if binding::BUFFERS.contains(&b) {
-                        vk::DescriptorType::STORAGE_BUFFER
-                    } else {
-                        vk::DescriptorType::COMBINED_IMAGE_SAMPLER
-                    })
+                    .binding(b as u32)
+                    .descriptor_type(kind)
                     .descriptor_count(1)
                     .stage_flags(vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT)
             })
@@ -71,10 +98,10 @@ impl Layouts {
             )
         }
         .vk("creating the descriptor set layout")?;
-        ctx.name(set, "antiradiance set layout");
+        ctx.name(set, &format!("{name} set layout"));
         let ranges = [vk::PushConstantRange::default()
             .stage_flags(vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT)
-            .size(std::mem::size_of::<PassConstants>() as u32)];
+            .size(push_bytes)];
         let sets = [set];
         let pipeline = unsafe {
             ctx.device.create_pipeline_layout(
@@ -85,7 +112,7 @@ impl Layouts {
             )
         }
         .vk("creating the pipeline layout")?;
-        ctx.name(pipeline, "antiradiance pipeline layout");
+        ctx.name(pipeline, &format!("{name} pipeline layout"));
         Ok(Self { set, pipeline })
     }
 
@@ -143,7 +170,11 @@ pub fn create(
     let vb = [vk::VertexInputBindingDescription::default()
         .binding(0)
         .stride(desc.stride)
-        .input_rate(vk::VertexInputRate::INSTANCE)];
+        .input_rate(if desc.per_vertex {
+            vk::VertexInputRate::VERTEX
+        } else {
+            vk::VertexInputRate::INSTANCE
+        })];
     let attrs: Vec<_> = desc
         .attributes
         .iter()
@@ -207,6 +238,13 @@ pub fn create(
     let formats: Vec<_> = desc.targets.iter().map(|t| t.format).collect();
     let mut rendering =
         vk::PipelineRenderingCreateInfo::default().color_attachment_formats(&formats);
+    let depth_state = vk::PipelineDepthStencilStateCreateInfo::default()
+        .depth_test_enable(desc.depth)
+        .depth_write_enable(desc.depth)
+        .depth_compare_op(vk::CompareOp::LESS);
+    if desc.depth {
+        rendering = rendering.depth_attachment_format(super::memory::DEPTH_FORMAT);
+    }
     let info = vk::GraphicsPipelineCreateInfo::default()
         .stages(&stages)
         .vertex_input_state(&vertex_input)
@@ -215,6 +253,7 @@ pub fn create(
         .rasterization_state(&raster)
         .multisample_state(&ms)
         .color_blend_state(&blend)
+        .depth_stencil_state(&depth_state)
         .dynamic_state(&dyn_state)
         .layout(layout)
         .push_next(&mut rendering);

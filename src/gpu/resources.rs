@@ -241,21 +241,8 @@ impl Resources {
         ctx.upload_image(&mut images.direct, &zero)?;
         let vb = vk::BufferUsageFlags::VERTEX_BUFFER;
         let sb = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let materials: Vec<GpuMaterial> = sys
-            .materials
-            .iter()
-            .map(|mt| GpuMaterial {
-                kd: [mt.kd.x as f32, mt.kd.y as f32, mt.kd.z as f32, 0.0],
-                ks_ns: [mt.ks.x as f32, mt.ks.y as f32, mt.ks.z as f32, mt.ns as f32],
-                ke: [mt.ke.x as f32, mt.ke.y as f32, mt.ke.z as f32, 0.0],
-            })
-            .collect();
-        let centers: Vec<[f32; 4]> = sys
-            .bins
-            .centers
-            .iter()
-            .map(|c| [c.x as f32, c.y as f32, c.z as f32, 0.0])
-            .collect();
+        let materials: Vec<GpuMaterial> = sys.materials.iter().map(GpuMaterial::new).collect();
+        let centers = super::layout::bin_centers(&sys.bins);
         let buffers = Buffers {
             links: ctx.upload_buffer("links", as_bytes(&draw.links), vb)?,
             push_quads: ctx.upload_buffer("push quads", as_bytes(&draw.push_quads), vb)?,

@@ -28,6 +28,15 @@ pub const SOURCES: &[(&str, &str)] = &[
     ("pull.frag", include_str!("../../glsl/pull.frag")),
     ("coverage.frag", include_str!("../../glsl/coverage.frag")),
     ("probe.frag", include_str!("../../glsl/probe.frag")),
+    ("frame.glsl", include_str!("../../glsl/frame.glsl")),
+    ("shadow.vert", include_str!("../../glsl/shadow.vert")),
+    ("shadow.frag", include_str!("../../glsl/shadow.frag")),
+    ("gbuffer.vert", include_str!("../../glsl/gbuffer.vert")),
+    ("gbuffer.frag", include_str!("../../glsl/gbuffer.frag")),
+    ("splat.vert", include_str!("../../glsl/splat.vert")),
+    ("splat.frag", include_str!("../../glsl/splat.frag")),
+    ("compose.vert", include_str!("../../glsl/compose.vert")),
+    ("compose.frag", include_str!("../../glsl/compose.frag")),
 ];
 
 /// Looks up an embedded source.

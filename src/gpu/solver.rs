@@ -442,6 +442,18 @@ impl GpuSolver {
         t
     }
 
+    /// Makes I_total readable by shaders (a frame's passes, or the host's own) in `cmd`.
+    pub fn prepare_display(&mut self, cmd: vk::CommandBuffer) {
+        super::barrier::transition(
+            &self.ctx,
+            cmd,
+            &mut [(
+                &mut self.res.images.i_total,
+                super::barrier::Access::Sampled,
+            )],
+        );
+    }
+
     /// The images a host application reads.
     pub fn images(&self) -> SolverImages {
         let im = &self.res.images;

@@ -1,13 +1,18 @@
 //! The four operations of §4.2 as raster passes — [`global`], [`push`], [`local`], [`pull`] —
-//! and what they share: the pipelines, attachment load/clear, push constants.
+//! and what they share: the pipelines, attachment load/clear, push constants. The frame passes
+//! (§3.3, §4.3) — [`shadow`], [`gbuffer`], [`splat`], [`compose`] — use [`FramePass`].
 
+pub mod compose;
+pub mod gbuffer;
 pub mod global;
 pub mod local;
 pub mod pull;
 pub mod push;
+pub mod shadow;
+pub mod splat;
 
 use super::context::Context;
-use super::layout::{mode, PassConstants, PullLine, QuadInstance};
+use super::layout::{mode, FrameConstants, PassConstants, PullLine, QuadInstance};
 use super::memory::Image;
 use super::pipelines::{create, PipelineDesc, Target};
 use super::resources::Resources;
@@ -15,10 +20,12 @@ use crate::error::Result;
 use ash::vk;
 
 /// What a render pass does with an attachment's previous contents.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Load {
     /// Clear to zero (accumulation starts from nothing).
     Clear,
+    /// Clear every channel to this value (shadow maps start at "nothing seen"; depth at 1).
+    ClearTo(f32),
     /// Keep (accumulate onto, or leave write-masked texels as they are).
     Keep,
 }
@@ -68,6 +75,8 @@ impl Pipelines {
                 attributes: &[(UINT4, 0), (vk::Format::R32_SFLOAT, 16)],
                 targets: &accumulate,
                 mode: None,
+                per_vertex: false,
+                depth: false,
             },
         )?;
         let push = create(
@@ -82,6 +91,8 @@ impl Pipelines {
                 attributes: &quad,
                 targets: &accumulate,
                 mode: None,
+                per_vertex: false,
+                depth: false,
             },
         )?;
         let put = Target {
@@ -101,6 +112,8 @@ impl Pipelines {
                 attributes: &quad,
                 targets: &[put, put],
                 mode: None,
+                per_vertex: false,
+                depth: false,
             },
         )?;
         let pull = create(
@@ -119,6 +132,8 @@ impl Pipelines {
                     write: true,
                 }],
                 mode: None,
+                per_vertex: false,
+                depth: false,
             },
         )?;
         Ok(Self {
@@ -186,6 +201,8 @@ impl Pipelines {
                     attributes: &quad,
                     targets: &targets,
                     mode: Some(m),
+                    per_vertex: false,
+                    depth: false,
                 },
             )?);
         }
@@ -204,33 +221,69 @@ impl Pipelines {
     }
 }
 
+fn attachment(
+    img: &Image,
+    load: Load,
+    layout: vk::ImageLayout,
+) -> vk::RenderingAttachmentInfo<'static> {
+    let value = match load {
+        Load::ClearTo(v) => v,
+        _ => 0.0,
+    };
+    vk::RenderingAttachmentInfo::default()
+        .image_view(img.view)
+        .image_layout(layout)
+        .load_op(match load {
+            Load::Clear | Load::ClearTo(_) => vk::AttachmentLoadOp::CLEAR,
+            Load::Keep => vk::AttachmentLoadOp::LOAD,
+        })
+        .store_op(vk::AttachmentStoreOp::STORE)
+        .clear_value(if layout == vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL {
+            vk::ClearValue {
+                depth_stencil: vk::ClearDepthStencilValue {
+                    depth: value,
+                    stencil: 0,
+                },
+            }
+        } else {
+            vk::ClearValue {
+                color: vk::ClearColorValue {
+                    float32: [value; 4],
+                },
+            }
+        })
+}
+
 /// Begins dynamic rendering into `targets` (all of `extent`), with viewport and scissor set.
 pub fn begin_rendering(ctx: &Context, cmd: vk::CommandBuffer, targets: &[(&Image, Load)]) {
+    begin_rendering_with_depth(ctx, cmd, targets, None)
+}
+
+/// [`begin_rendering`] with an optional depth attachment.
+pub fn begin_rendering_with_depth(
+    ctx: &Context,
+    cmd: vk::CommandBuffer,
+    targets: &[(&Image, Load)],
+    depth: Option<(&Image, Load)>,
+) {
     let extent = targets[0].0.extent;
     let atts: Vec<_> = targets
         .iter()
-        .map(|(img, load)| {
-            vk::RenderingAttachmentInfo::default()
-                .image_view(img.view)
-                .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
-                .load_op(match load {
-                    Load::Clear => vk::AttachmentLoadOp::CLEAR,
-                    Load::Keep => vk::AttachmentLoadOp::LOAD,
-                })
-                .store_op(vk::AttachmentStoreOp::STORE)
-                .clear_value(vk::ClearValue {
-                    color: vk::ClearColorValue { float32: [0.0; 4] },
-                })
-        })
+        .map(|(img, load)| attachment(img, *load, vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL))
         .collect();
+    let depth_att =
+        depth.map(|(img, load)| attachment(img, load, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL));
     let area = vk::Rect2D {
         offset: vk::Offset2D::default(),
         extent,
     };
-    let info = vk::RenderingInfo::default()
+    let mut info = vk::RenderingInfo::default()
         .render_area(area)
         .layer_count(1)
         .color_attachments(&atts);
+    if let Some(d) = depth_att.as_ref() {
+        info = info.depth_attachment(d);
+    }
     unsafe {
         ctx.device.cmd_begin_rendering(cmd, &info);
         ctx.device.cmd_set_viewport(
@@ -313,6 +366,67 @@ impl Pass<'_> {
             self.ctx
                 .device
                 .cmd_draw(self.cmd, vertices, instances as u32, 0, 0);
+        }
+    }
+}
+
+/// What a frame pass records with (the frame's own layout and set, [`FrameConstants`] pushes).
+pub struct FramePass<'a> {
+    /// Device.
+    pub ctx: &'a Context,
+    /// Command buffer being recorded.
+    pub cmd: vk::CommandBuffer,
+    /// Frame pipeline layout.
+    pub layout: vk::PipelineLayout,
+    /// Frame descriptor set.
+    pub set: vk::DescriptorSet,
+}
+
+impl FramePass<'_> {
+    /// Binds `pipeline`, the frame set and `constants`.
+    pub fn bind(&self, pipeline: vk::Pipeline, constants: &FrameConstants) {
+        let d = &self.ctx.device;
+        unsafe {
+            d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
+            d.cmd_bind_descriptor_sets(
+                self.cmd,
+                vk::PipelineBindPoint::GRAPHICS,
+                self.layout,
+                0,
+                &[self.set],
+                &[],
+            );
+            self.push(constants);
+        }
+    }
+
+    /// Updates the push constants only.
+    pub fn push(&self, constants: &FrameConstants) {
+        unsafe {
+            self.ctx.device.cmd_push_constants(
+                self.cmd,
+                self.layout,
+                vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
+                0,
+                super::layout::as_bytes(std::slice::from_ref(constants)),
+            )
+        };
+    }
+
+    /// Draws `vertices` × `instances` from `buffer` (bound when not null).
+    pub fn draw(&self, buffer: vk::Buffer, vertices: u32, instances: u32) {
+        if vertices == 0 || instances == 0 {
+            return;
+        }
+        unsafe {
+            if buffer != vk::Buffer::null() {
+                self.ctx
+                    .device
+                    .cmd_bind_vertex_buffers(self.cmd, 0, &[buffer], &[0]);
+            }
+            self.ctx
+                .device
+                .cmd_draw(self.cmd, vertices, instances, 0, 0);
         }
     }
 }

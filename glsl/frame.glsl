@@ -1,0 +1,180 @@
+// Shared code of the frame passes (shadow maps, G-buffer, splat, compose); mirrors
+// src/frame/{lights,shadow,surfaces}.rs, which the CPU frame uses. Constants here are checked
+// against the Rust ones by tests in src/frame/shadow.rs and src/frame/surfaces.rs.
+#ifndef ANTIRADIANCE_FRAME_GLSL
+#define ANTIRADIANCE_FRAME_GLSL
+#define AR_FRAME_PASS
+#include "common.glsl"
+#include "bins.glsl"
+
+layout(binding = AR_FRAME_I_TOTAL) uniform sampler2D i_total;
+layout(std430, binding = AR_FRAME_MATERIALS) readonly buffer Materials { Material materials[]; };
+layout(std430, binding = AR_FRAME_BIN_CENTERS) readonly buffer BinCenters { vec4 bin_centers[]; };
+layout(std430, binding = AR_FRAME_ELEMENTS) readonly buffer Elements { FrameElement elements[]; };
+layout(std430, binding = AR_FRAME_ADJ_OFFSETS) readonly buffer AdjOffsets { uint adj_offsets[]; };
+layout(std430, binding = AR_FRAME_ADJ_LIST) readonly buffer AdjList { uint adj_list[]; };
+layout(std430, binding = AR_FRAME_LIGHTS) readonly buffer Lights { Light lights[]; };
+layout(std430, binding = AR_FRAME_SHADOW_VIEWS) readonly buffer ShadowViews { ShadowView shadow_views[]; };
+layout(binding = AR_FRAME_SHADOW_MAP) uniform sampler2D shadow_map;
+layout(binding = AR_FRAME_GBUF_POSITION) uniform sampler2D gbuf_position;
+layout(binding = AR_FRAME_GBUF_VERTEX) uniform sampler2D gbuf_vertex;
+layout(binding = AR_FRAME_SPLAT) uniform sampler2D splat_sum;
+
+const float AR_SHADOW_NORMAL_OFFSET = 1.5;
+const float AR_SHADOW_CONSTANT_BIAS = 1.0;
+const float AR_SHADOW_SLOPE_BIAS = 1.5;
+const float AR_SHADOW_FILTER_RADIUS = 1.5;
+const uint AR_MODE_VERTEX = 1u;
+
+uint ar_nu() { return pc.sizes.z & 0xFFFFu; }
+uint ar_nv() { return pc.sizes.z >> 16; }
+
+// lights.rs front_bin: a bin on side `side` of the plane with normal n.
+uint ar_front_bin(vec3 dir, vec3 n, float side) {
+    uint b = ar_bin_of(dir, ar_nu(), ar_nv());
+    const float k[6] = float[](0.25, 0.5, 1.0, 2.0, 4.0, 16.0);
+    for (int i = 0; i < 6; i++) {
+        if (side * dot(bin_centers[b].xyz, n) > 0.05) {
+            break;
+        }
+        b = ar_bin_of(normalize(dir) + n * (side * k[i]), ar_nu(), ar_nv());
+    }
+    return b;
+}
+
+// surfaces.rs display_radiance: I_total in the bin toward the eye, as radiance.
+vec3 ar_display_radiance(uint leaf, vec3 wo) {
+    FrameElement e = elements[leaf];
+    vec3 n = e.normal_area.xyz;
+    if (dot(wo, n) <= 0.0) {
+        return vec3(0.0);
+    }
+    uint b = ar_front_bin(wo, n, 1.0);
+    float cb = dot(bin_centers[b].xyz, n);
+    uint m = ar_nu() * ar_nv();
+    uint row = e.ids.x;
+    ivec2 t = ivec2((row / pc.sizes.w) * m + b, row % pc.sizes.w);
+    return texelFetch(i_total, t, 0).rgb * pc.eye.w / (e.normal_area.w * e.cos_norm.x * cb);
+}
+
+float ar_splat_weight(float d, float r) {
+    float x = d / r;
+    if (x >= 1.0) {
+        return 0.0;
+    }
+    float a = 1.0 - x * x;
+    return a * a;
+}
+
+// lights.rs brdf.
+vec3 ar_brdf(Material m, vec3 n, vec3 travel, vec3 wo) {
+    vec3 f = m.kd.rgb / AR_PI;
+    if (max(m.ks_ns.r, max(m.ks_ns.g, m.ks_ns.b)) > 0.0) {
+        vec3 r = travel - 2.0 * dot(travel, n) * n;
+        float c = dot(r, wo);
+        if (c > 0.0) {
+            f += m.ks_ns.rgb * ((m.ks_ns.a + 2.0) / (2.0 * AR_PI) * pow(c, m.ks_ns.a));
+        }
+    }
+    return f;
+}
+
+// lights.rs incident.
+bool ar_incident(Light l, vec3 p, out vec3 travel, out vec3 irradiance) {
+    uint kind = l.kind_views.x;
+    if (kind == 0u) {
+        travel = l.direction.xyz;
+        irradiance = l.power.rgb;
+        return true;
+    }
+    vec3 v = p - l.position.xyz;
+    float r2 = dot(v, v);
+    travel = vec3(0.0);
+    irradiance = vec3(0.0);
+    if (r2 <= 0.0) {
+        return false;
+    }
+    travel = v * inversesqrt(r2);
+    irradiance = l.power.rgb / r2;
+    if (kind == 2u) {
+        float angle = acos(clamp(dot(travel, l.direction.xyz), -1.0, 1.0));
+        float beam = l.params.x;
+        float cutoff = l.power.w;
+        float f = angle <= beam ? 1.0 : (angle >= cutoff ? 0.0 : (cutoff - angle) / (cutoff - beam));
+        if (f <= 0.0) {
+            return false;
+        }
+        irradiance *= f;
+    }
+    return true;
+}
+
+uint ar_cube_face(vec3 v) {
+    vec3 a = abs(v);
+    if (a.x >= a.y && a.x >= a.z) {
+        return v.x < 0.0 ? 1u : 0u;
+    }
+    if (a.y >= a.z) {
+        return v.y < 0.0 ? 3u : 2u;
+    }
+    return v.z < 0.0 ? 5u : 4u;
+}
+
+// shadow.rs ShadowMaps::visibility: tent-filtered percentage-closer lookup.
+float ar_visibility(Light l, vec3 p, vec3 n, float cosv) {
+    uint vi = l.kind_views.y;
+    if (l.kind_views.z == 6u) {
+        vi += ar_cube_face(p - shadow_views[vi].origin.xyz);
+    }
+    ShadowView v = shadow_views[vi];
+    int s = int(pc.misc.z);
+    bool ortho = v.origin.w > 0.5;
+    float texel = 2.0 * v.forward.w * (ortho ? 1.0 : length(p - v.origin.xyz)) / float(s);
+    vec3 q = p + n * (AR_SHADOW_NORMAL_OFFSET * texel);
+    vec4 c = v.view_proj * vec4(q, 1.0);
+    float tx = (c.x / c.w + 1.0) * 0.5 * float(s) - 0.5;
+    float ty = (c.y / c.w + 1.0) * 0.5 * float(s) - 0.5;
+    float tanv = min(sqrt(max(1.0 - cosv * cosv, 0.0)) / max(cosv, 1e-6), 8.0);
+    float dist = ortho ? dot(q - v.origin.xyz, v.forward.xyz) : length(q - v.origin.xyz);
+    float d = dist - texel * (AR_SHADOW_CONSTANT_BIAS + AR_SHADOW_SLOPE_BIAS * tanv);
+    int x0 = int(floor(tx - AR_SHADOW_FILTER_RADIUS)) + 1;
+    int y0 = int(floor(ty - AR_SHADOW_FILTER_RADIUS)) + 1;
+    float lit = 0.0;
+    float total = 0.0;
+    for (int ky = y0; ky < y0 + 3; ky++) {
+        float wy = max(1.0 - abs(float(ky) - ty) / AR_SHADOW_FILTER_RADIUS, 0.0);
+        for (int kx = x0; kx < x0 + 3; kx++) {
+            float wx = max(1.0 - abs(float(kx) - tx) / AR_SHADOW_FILTER_RADIUS, 0.0);
+            float w = wx * wy;
+            ivec2 t = ivec2(clamp(kx, 0, s - 1), clamp(ky, 0, s - 1) + int(vi) * s);
+            total += w;
+            if (d <= texelFetch(shadow_map, t, 0).r) {
+                lit += w;
+            }
+        }
+    }
+    return total > 0.0 ? lit / total : 1.0;
+}
+
+// lights.rs direct_radiance.
+vec3 ar_direct_radiance(vec3 p, vec3 n, Material m, vec3 wo) {
+    vec3 l = vec3(0.0);
+    for (uint i = 0u; i < pc.misc.x; i++) {
+        vec3 travel;
+        vec3 e;
+        if (!ar_incident(lights[i], p, travel, e)) {
+            continue;
+        }
+        float cosv = -dot(travel, n);
+        if (cosv <= 0.0) {
+            continue;
+        }
+        float v = ar_visibility(lights[i], p, n, cosv);
+        if (v > 0.0) {
+            l += ar_brdf(m, n, travel, wo) * e * (cosv * v);
+        }
+    }
+    return l;
+}
+
+#endif

@@ -1,0 +1,14 @@
+#version 450
+#extension GL_GOOGLE_include_directive : require
+#include "frame.glsl"
+
+layout(location = 0) in vec3 world;
+layout(location = 1) flat in uint leaf;
+layout(location = 2) in vec3 vertex_radiance;
+layout(location = 0) out vec4 out_position;  // xyz, leaf slot + 1 (0 = background)
+layout(location = 1) out vec4 out_vertex;
+
+void main() {
+    out_position = vec4(world, float(leaf + 1u));
+    out_vertex = vec4(vertex_radiance, 0.0);
+}

@@ -1,0 +1,33 @@
+#version 450
+// G-buffer at 2x2 samples per pixel (src/gpu/passes/gbuffer.rs). Vertex-interpolated elements get
+// their corners' values here: the area-weighted display radiance of the elements around the
+// shared vertex, in the bin toward the eye (surfaces.rs vertex_values).
+#extension GL_GOOGLE_include_directive : require
+#include "frame.glsl"
+
+layout(location = 0) in vec3 position;
+layout(location = 1) in uint leaf;
+layout(location = 2) in uint vertex;
+layout(location = 0) out vec3 world;
+layout(location = 1) flat out uint leaf_out;
+layout(location = 2) out vec3 vertex_radiance;
+
+void main() {
+    world = position;
+    leaf_out = leaf;
+    vec3 acc = vec3(0.0);
+    float w = 0.0;
+    if (vertex != 0xFFFFFFFFu) {
+        vec3 wo = normalize(pc.eye.xyz - position);
+        for (uint i = adj_offsets[vertex]; i < adj_offsets[vertex + 1u]; i++) {
+            uint e = adj_list[i];
+            vec4 na = elements[e].normal_area;
+            if (dot(wo, na.xyz) > 0.0) {
+                acc += ar_display_radiance(e, wo) * na.w;
+                w += na.w;
+            }
+        }
+    }
+    vertex_radiance = w > 0.0 ? acc / w : vec3(0.0);
+    gl_Position = pc.view_proj * vec4(position, 1.0);
+}

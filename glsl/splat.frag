@@ -1,0 +1,24 @@
+#version 450
+// Adds w·L and w where the G-buffer shows the same flat surface (the normalization is in compose).
+#extension GL_GOOGLE_include_directive : require
+#include "frame.glsl"
+
+layout(location = 0) flat in uint leaf;
+layout(location = 0) out vec4 acc;
+
+void main() {
+    vec4 g = texelFetch(gbuf_position, ivec2(gl_FragCoord.xy), 0);
+    if (g.w < 0.5) {
+        discard;
+    }
+    FrameElement h = elements[uint(g.w + 0.5) - 1u];
+    FrameElement e = elements[leaf];
+    if (h.ids.z == AR_MODE_VERTEX || h.ids.y != e.ids.y) {
+        discard;
+    }
+    float w = ar_splat_weight(length(g.xyz - e.center_radius.xyz), e.center_radius.w);
+    if (w <= 0.0) {
+        discard;
+    }
+    acc = vec4(ar_display_radiance(leaf, normalize(pc.eye.xyz - g.xyz)) * w, w);
+}

@@ -1,0 +1,112 @@
+//! The scene's pinhole camera as rays (CPU frame) and as a view-projection matrix (GPU frame).
+//! Both agree on the convention of the scene format: pixel (0,0) is the top-left corner, image
+//! right is `forward × up`, `fov_y_deg` spans the image height.
+
+use crate::scene::Camera;
+use glam::{DMat4, DVec3, DVec4};
+
+/// Supersampling per axis: the frame is rendered at 2×2 samples per pixel (4× anti-aliasing),
+/// at sample positions (0.25, 0.25), (0.75, 0.25), (0.25, 0.75), (0.75, 0.75) within the pixel.
+pub const SUPERSAMPLE: u32 = 2;
+
+/// Orthonormal camera frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct View {
+    /// Eye position.
+    pub eye: DVec3,
+    /// Unit viewing direction.
+    pub forward: DVec3,
+    /// Unit image-right direction.
+    pub right: DVec3,
+    /// Unit image-up direction.
+    pub up: DVec3,
+    /// `tan(fov_y / 2)`.
+    pub tan_half: f64,
+    /// Width / height.
+    pub aspect: f64,
+    /// Image size in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+}
+
+impl View {
+    /// The frame of `cam`, at the camera's own resolution.
+    pub fn new(cam: &Camera) -> Self {
+        let forward = (cam.target - cam.eye).normalize();
+        let right = forward.cross(cam.up).normalize();
+        let up = right.cross(forward);
+        Self {
+            eye: cam.eye,
+            forward,
+            right,
+            up,
+            tan_half: (cam.fov_y_deg.to_radians() * 0.5).tan(),
+            aspect: cam.width as f64 / cam.height as f64,
+            width: cam.width,
+            height: cam.height,
+        }
+    }
+
+    /// Unit direction through image position (`x`, `y`) in pixels (continuous; 0,0 = top-left).
+    pub fn ray(&self, x: f64, y: f64) -> DVec3 {
+        let sx = (2.0 * x / self.width as f64 - 1.0) * self.tan_half * self.aspect;
+        let sy = (1.0 - 2.0 * y / self.height as f64) * self.tan_half;
+        (self.forward + self.right * sx + self.up * sy).normalize()
+    }
+
+    /// World → Vulkan clip space (x right, y down, depth 0 at `near` to 1 at `far`), matching
+    /// [`View::ray`]: a point on the ray through (x, y) lands on framebuffer position (x, y).
+    pub fn view_proj(&self, near: f64, far: f64) -> DMat4 {
+        let (r, u, f) = (self.right, self.up, self.forward);
+        // Camera space: x right, y down, z forward (depth).
+        let view = DMat4::from_cols(
+            DVec4::new(r.x, -u.x, f.x, 0.0),
+            DVec4::new(r.y, -u.y, f.y, 0.0),
+            DVec4::new(r.z, -u.z, f.z, 0.0),
+            DVec4::new(-r.dot(self.eye), u.dot(self.eye), -f.dot(self.eye), 1.0),
+        );
+        let (sx, sy) = (1.0 / (self.tan_half * self.aspect), 1.0 / self.tan_half);
+        let a = far / (far - near);
+        let proj = DMat4::from_cols(
+            DVec4::new(sx, 0.0, 0.0, 0.0),
+            DVec4::new(0.0, sy, 0.0, 0.0),
+            DVec4::new(0.0, 0.0, a, 1.0),
+            DVec4::new(0.0, 0.0, -a * near, 0.0),
+        );
+        proj * view
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn projection_matches_rays() {
+        let cam = Camera {
+            eye: DVec3::new(0.3, 1.0, 4.0),
+            target: DVec3::new(0.0, 0.8, 0.0),
+            up: DVec3::Y,
+            fov_y_deg: 40.0,
+            width: 64,
+            height: 48,
+        };
+        let v = View::new(&cam);
+        let m = v.view_proj(0.01, 100.0);
+        for (x, y) in [(0.0, 0.0), (10.5, 3.25), (64.0, 48.0), (32.0, 24.0)] {
+            let p = v.eye + v.ray(x, y) * 3.0;
+            let c = m * p.extend(1.0);
+            let ndc = c.truncate() / c.w;
+            let (fx, fy) = ((ndc.x + 1.0) * 32.0, (ndc.y + 1.0) * 24.0);
+            assert!(
+                (fx - x).abs() < 1e-9 && (fy - y).abs() < 1e-9,
+                "{x},{y} -> {fx},{fy}"
+            );
+            assert!(ndc.z > 0.0 && ndc.z < 1.0);
+        }
+        // Image right is forward × up; top row looks up.
+        assert!(v.ray(64.0, 24.0).dot(v.right) > 0.0);
+        assert!(v.ray(32.0, 0.0).y > v.ray(32.0, 48.0).y);
+    }
+}

@@ -1,0 +1,132 @@
+//! The frame on the CPU: the same image formation as the GPU frame passes (`src/gpu/frame.rs`),
+//! by ray casting at the same 2×2 sample positions: emission, per-pixel direct light with the
+//! shadow maps, indirect light splatted or vertex-interpolated, environment where rays escape.
+
+use super::camera::{View, SUPERSAMPLE};
+use super::image::Image;
+use super::lights::direct_radiance;
+use super::shadow::ShadowMaps;
+use super::surfaces::{display_radiance, splat_weight, vertex_values, Surfaces, MODE_VERTEX};
+use crate::raycast::RayCaster;
+use crate::scene::Scene;
+use crate::solver::Table;
+use crate::system::System;
+use glam::DVec3;
+use rayon::prelude::*;
+use std::collections::HashMap;
+
+/// Splatted element centers hashed on a grid of the largest splat radius.
+struct SplatGrid {
+    cell: f64,
+    cells: HashMap<(i64, i64, i64), Vec<u32>>,
+}
+
+impl SplatGrid {
+    fn new(surf: &Surfaces) -> Self {
+        let cell = surf.max_radius.max(1e-12);
+        let mut cells: HashMap<_, Vec<u32>> = HashMap::new();
+        for (li, c) in surf.center.iter().enumerate() {
+            if surf.mode[li] != MODE_VERTEX {
+                let k = (*c / cell).floor();
+                cells
+                    .entry((k.x as i64, k.y as i64, k.z as i64))
+                    .or_default()
+                    .push(li as u32);
+            }
+        }
+        Self { cell, cells }
+    }
+
+    fn near(&self, p: DVec3, mut f: impl FnMut(u32)) {
+        let k = (p / self.cell).floor();
+        let (x, y, z) = (k.x as i64, k.y as i64, k.z as i64);
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    if let Some(v) = self.cells.get(&(x + dx, y + dy, z + dz)) {
+                        v.iter().for_each(|&i| f(i));
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Renders `scene`'s camera view from the solved display intensities `i_total`.
+pub fn render(
+    scene: &Scene,
+    sys: &System,
+    i_total: &Table,
+    maps: &ShadowMaps,
+    surf: &Surfaces,
+    caster: &RayCaster,
+) -> Image {
+    let view = View::new(&scene.camera);
+    let verts = vertex_values(surf, sys, i_total, view.eye);
+    let grid = SplatGrid::new(surf);
+    let (w, h) = (view.width as usize, view.height as usize);
+    let mut pixels = vec![[0f32; 3]; w * h];
+    let n = (SUPERSAMPLE * SUPERSAMPLE) as f64;
+    pixels.par_chunks_mut(w).enumerate().for_each(|(py, row)| {
+        for (px, out) in row.iter_mut().enumerate() {
+            let mut sum = DVec3::ZERO;
+            for sy in 0..SUPERSAMPLE {
+                for sx in 0..SUPERSAMPLE {
+                    let x = px as f64 + (sx as f64 + 0.5) / SUPERSAMPLE as f64;
+                    let y = py as f64 + (sy as f64 + 0.5) / SUPERSAMPLE as f64;
+                    let d = view.ray(x, y);
+                    sum += match caster.closest(view.eye, d, 0.0, f64::INFINITY) {
+                        None => scene.environment,
+                        Some(hit) => {
+                            let li = hit.leaf as usize;
+                            let leaf = &sys.leaves[li];
+                            let c = caster.corners(hit.leaf);
+                            let p = c[0] * (1.0 - hit.u - hit.v) + c[1] * hit.u + c[2] * hit.v;
+                            let wo = -d;
+                            if wo.dot(leaf.normal) <= 0.0 {
+                                DVec3::ZERO // one-sided surfaces: the back is black
+                            } else {
+                                let mat = &sys.materials[leaf.material as usize];
+                                let mut l = mat.ke
+                                    + direct_radiance(&scene.lights, maps, p, leaf.normal, mat, wo);
+                                if surf.mode[li] == MODE_VERTEX {
+                                    let cv = surf.corner_vertex[li];
+                                    l += verts[cv[0] as usize] * (1.0 - hit.u - hit.v)
+                                        + verts[cv[1] as usize] * hit.u
+                                        + verts[cv[2] as usize] * hit.v;
+                                } else {
+                                    let s = surf.surface[li];
+                                    let (mut acc, mut wsum) = (DVec3::ZERO, 0.0);
+                                    grid.near(p, |e| {
+                                        let e = e as usize;
+                                        if surf.surface[e] == s {
+                                            let wt = splat_weight(
+                                                (p - surf.center[e]).length(),
+                                                surf.radius[e],
+                                            );
+                                            if wt > 0.0 {
+                                                acc += display_radiance(sys, i_total, e, wo) * wt;
+                                                wsum += wt;
+                                            }
+                                        }
+                                    });
+                                    if wsum > 0.0 {
+                                        l += acc / wsum;
+                                    }
+                                }
+                                l
+                            }
+                        }
+                    };
+                }
+            }
+            let v = sum / n;
+            *out = [v.x as f32, v.y as f32, v.z as f32];
+        }
+    });
+    Image {
+        width: view.width,
+        height: view.height,
+        pixels,
+    }
+}

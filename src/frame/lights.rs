@@ -1,0 +1,192 @@
+//! Direct light from the analytic lights (§3.3): the irradiance a light delivers, the leaves'
+//! direct incident radiance that initializes the solve (reflected, never turned into antiradiance:
+//! the shadow map already accounted for occlusion), and the per-pixel direct radiance of the frame.
+//! `glsl/frame.glsl` mirrors [`direct_radiance`] and [`front_bin`].
+
+use super::shadow::ShadowMaps;
+use crate::bins::Bins;
+use crate::brdf::phong_lobe;
+use crate::scene::{Light, Material};
+use crate::solver::Table;
+use crate::system::System;
+use glam::DVec3;
+use std::f64::consts::PI;
+
+/// Light arriving at a point from one analytic light, before the receiver's cosine and shadowing.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Incident {
+    /// Unit direction in which the light travels (from the light to the point).
+    pub travel: DVec3,
+    /// Irradiance on a surface facing the light (W/m²).
+    pub irradiance: DVec3,
+}
+
+/// Spot fall-off: 1 within the beam width, linear in angle to 0 at the cut-off.
+pub fn spot_falloff(angle: f64, beam_width: f64, cutoff: f64) -> f64 {
+    if angle <= beam_width {
+        1.0
+    } else if angle >= cutoff {
+        0.0
+    } else {
+        (cutoff - angle) / (cutoff - beam_width)
+    }
+}
+
+/// What `light` delivers at `p` (None where it delivers nothing: at the light, outside a cone).
+pub fn incident(light: &Light, p: DVec3) -> Option<Incident> {
+    match *light {
+        Light::Directional {
+            direction,
+            irradiance,
+        } => Some(Incident {
+            travel: direction,
+            irradiance,
+        }),
+        Light::Point {
+            position,
+            intensity,
+        } => {
+            let v = p - position;
+            let r2 = v.length_squared();
+            (r2 > 0.0).then(|| Incident {
+                travel: v / r2.sqrt(),
+                irradiance: intensity / r2,
+            })
+        }
+        Light::Spot {
+            position,
+            axis,
+            intensity,
+            cutoff,
+            beam_width,
+        } => {
+            let v = p - position;
+            let r2 = v.length_squared();
+            if r2 <= 0.0 {
+                return None;
+            }
+            let travel = v / r2.sqrt();
+            let angle = travel.dot(axis).clamp(-1.0, 1.0).acos();
+            let f = spot_falloff(angle, beam_width, cutoff);
+            (f > 0.0).then(|| Incident {
+                travel,
+                irradiance: intensity * (f / r2),
+            })
+        }
+    }
+}
+
+/// A bin on the requested side of a surface: the bin of `dir`, or, where its center lies within
+/// ~3° of the plane or beyond it, the bin of `dir` tilted toward `side·n` in growing steps.
+/// `side` is +1 for exitant directions, −1 for incident travel directions.
+pub fn front_bin(bins: &Bins, dir: DVec3, n: DVec3, side: f64) -> usize {
+    let mut b = bins.bin_of(dir);
+    for k in [0.25, 0.5, 1.0, 2.0, 4.0, 16.0] {
+        if side * bins.centers[b].dot(n) > 0.05 {
+            break;
+        }
+        b = bins.bin_of(dir.normalize() + n * (side * k));
+    }
+    b
+}
+
+/// BRDF of `mat` at normal `n` for light travelling along `travel` and leaving along `wo`.
+pub fn brdf(mat: &Material, n: DVec3, travel: DVec3, wo: DVec3) -> DVec3 {
+    let mut f = mat.kd / PI;
+    if mat.is_glossy() {
+        f += phong_lobe(mat.ks, mat.ns, n, travel, wo);
+    }
+    f
+}
+
+/// Radiance reflected toward `wo` at surface point `p` (unit normal `n`, facing `wo`) from every
+/// analytic light, shadowed by `maps`.
+pub fn direct_radiance(
+    lights: &[Light],
+    maps: &ShadowMaps,
+    p: DVec3,
+    n: DVec3,
+    mat: &Material,
+    wo: DVec3,
+) -> DVec3 {
+    let mut l = DVec3::ZERO;
+    for (i, light) in lights.iter().enumerate() {
+        let Some(inc) = incident(light, p) else {
+            continue;
+        };
+        let cos = -inc.travel.dot(n);
+        if cos <= 0.0 {
+            continue;
+        }
+        let v = maps.visibility(i, p, n, cos);
+        if v > 0.0 {
+            l += brdf(mat, n, inc.travel, wo) * inc.irradiance * (cos * v);
+        }
+    }
+    l
+}
+
+/// Direct incident radiance per node and bin (leaf rows only): each light puts, in the bin of
+/// its direction at the leaf's center, the radiance whose bin quadrature gives the exact shadowed
+/// irradiance there. This is what [`crate::CpuSolver::set_direct`] and
+/// [`crate::gpu::GpuSolver::set_direct`] take.
+pub fn direct_in_table(sys: &System, lights: &[Light], maps: &ShadowMaps) -> Table {
+    let mut t = Table::zeros(sys.rows(), sys.bins.count);
+    for leaf in &sys.leaves {
+        let e = &sys.elements[sys.hierarchy.element(leaf.node).expect("leaf") as usize];
+        let row = t.row_mut(leaf.node as usize);
+        for (i, light) in lights.iter().enumerate() {
+            let Some(inc) = incident(light, e.center) else {
+                continue;
+            };
+            let cos = -inc.travel.dot(leaf.normal);
+            if cos <= 0.0 {
+                continue;
+            }
+            let v = maps.visibility(i, e.center, leaf.normal, cos);
+            if v <= 0.0 {
+                continue;
+            }
+            let b = front_bin(&sys.bins, inc.travel, leaf.normal, -1.0);
+            let cb = -sys.bins.centers[b].dot(leaf.normal);
+            row[b] += inc.irradiance * (cos * v / (sys.bins.omega * leaf.cos_norm * cb));
+        }
+    }
+    t
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spot_falls_off_linearly_in_angle() {
+        let (b, c) = (0.3, 0.5);
+        assert_eq!(spot_falloff(0.1, b, c), 1.0);
+        assert!((spot_falloff(0.4, b, c) - 0.5).abs() < 1e-12);
+        assert_eq!(spot_falloff(0.6, b, c), 0.0);
+        let light = Light::Point {
+            position: DVec3::new(0.0, 2.0, 0.0),
+            intensity: DVec3::splat(8.0),
+        };
+        let inc = incident(&light, DVec3::ZERO).unwrap();
+        assert!((inc.irradiance.x - 2.0).abs() < 1e-12);
+        assert!((inc.travel - DVec3::NEG_Y).length() < 1e-12);
+    }
+
+    #[test]
+    fn front_bin_lies_on_the_requested_side() {
+        let bins = Bins::new(32).unwrap();
+        let n = DVec3::new(0.1, 0.2, 1.0).normalize();
+        for i in 0..200 {
+            let a = i as f64 * 0.37;
+            let d = DVec3::new(a.cos(), a.sin(), 0.01 * (i as f64 - 100.0)).normalize();
+            if d.dot(n) > 0.0 {
+                assert!(bins.centers[front_bin(&bins, d, n, 1.0)].dot(n) > 0.05);
+            }
+            if d.dot(n) < 0.0 {
+                assert!(bins.centers[front_bin(&bins, d, n, -1.0)].dot(n) < -0.05);
+            }
+        }
+    }
+}

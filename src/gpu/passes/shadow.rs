@@ -1,0 +1,70 @@
+//! Shadow maps (§3.3): every element corner drawn once per light view, each view into its own
+//! band of one R32F image, keeping the nearest linear distance (depth-tested).
+
+use super::{begin_rendering_with_depth, end_rendering, FramePass, Load};
+use crate::frame::shadow::EMPTY;
+use crate::gpu::barrier::{transition, Access};
+use crate::gpu::frame::FrameImages;
+use crate::gpu::layout::FrameConstants;
+use ash::vk;
+
+/// Records all `views` views of side `size`.
+#[allow(clippy::too_many_arguments)]
+pub fn record(
+    p: &FramePass<'_>,
+    pipeline: vk::Pipeline,
+    im: &mut FrameImages,
+    corners: vk::Buffer,
+    corner_count: u32,
+    views: u32,
+    size: u32,
+    mut constants: FrameConstants,
+) {
+    transition(
+        p.ctx,
+        p.cmd,
+        &mut [
+            (&mut im.shadow_map, Access::Attachment),
+            (&mut im.shadow_depth, Access::Depth),
+        ],
+    );
+    begin_rendering_with_depth(
+        p.ctx,
+        p.cmd,
+        &[(&im.shadow_map, Load::ClearTo(EMPTY))],
+        Some((&im.shadow_depth, Load::ClearTo(1.0))),
+    );
+    p.bind(pipeline, &constants);
+    for v in 0..views {
+        let band = vk::Rect2D {
+            offset: vk::Offset2D {
+                x: 0,
+                y: (v * size) as i32,
+            },
+            extent: vk::Extent2D {
+                width: size,
+                height: size,
+            },
+        };
+        unsafe {
+            p.ctx.device.cmd_set_viewport(
+                p.cmd,
+                0,
+                &[vk::Viewport {
+                    x: 0.0,
+                    y: (v * size) as f32,
+                    width: size as f32,
+                    height: size as f32,
+                    min_depth: 0.0,
+                    max_depth: 1.0,
+                }],
+            );
+            p.ctx.device.cmd_set_scissor(p.cmd, 0, &[band]);
+        }
+        constants.misc[1] = v;
+        p.push(&constants);
+        p.draw(corners, corner_count, 1);
+    }
+    end_rendering(p.ctx, p.cmd);
+    transition(p.ctx, p.cmd, &mut [(&mut im.shadow_map, Access::Sampled)]);
+}

@@ -1,0 +1,255 @@
+//! `render`: scene → image with either backend. Linking and meshing (CPU), shadow maps, the
+//! leaves' direct light, the iterations (GPU passes or the f64 CPU solver), then the frame.
+//! Progress is reported through [`Progress`] so the CLI can draw bars on stderr.
+
+use crate::error::Result;
+use crate::frame::cpu;
+use crate::frame::lights::direct_in_table;
+use crate::frame::shadow::ShadowMaps;
+use crate::frame::surfaces::Surfaces;
+use crate::frame::Image;
+use crate::raycast::RayCaster;
+use crate::scene::Scene;
+use crate::solver::Table;
+use crate::system::System;
+use crate::CpuSolver;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+/// Which implementation solves and draws the frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Backend {
+    /// Vulkan raster passes (§4).
+    Gpu,
+    /// The f64 CPU solver and a ray-cast frame: the reference the GPU is checked against.
+    Cpu,
+}
+
+/// Options of [`render`] beyond the scene's own settings.
+#[derive(Debug, Clone)]
+pub struct RenderOptions {
+    /// Backend.
+    pub backend: Backend,
+    /// Side of each shadow map (texels).
+    pub shadow_map_size: u32,
+    /// Vulkan device name filter (GPU backend).
+    pub device: Option<String>,
+    /// Enable the Vulkan validation layer (tests).
+    pub validation: bool,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        Self {
+            backend: Backend::Gpu,
+            shadow_map_size: 1024,
+            device: None,
+            validation: false,
+        }
+    }
+}
+
+/// Progress of the long steps.
+pub trait Progress {
+    /// A step with `total` units of work begins.
+    fn begin(&self, step: &str, total: u64);
+    /// `n` more units are done.
+    fn advance(&self, n: u64);
+    /// The current step is done.
+    fn end(&self);
+}
+
+/// Reports nothing.
+pub struct Silent;
+
+impl Progress for Silent {
+    fn begin(&self, _: &str, _: u64) {}
+    fn advance(&self, _: u64) {}
+    fn end(&self) {}
+}
+
+/// Statistics of a render (the `--json` file).
+#[derive(Debug, Clone, Serialize)]
+pub struct RenderStats {
+    /// Backend used.
+    pub backend: Backend,
+    /// Device (GPU backend) or "cpu".
+    pub device: String,
+    /// Leaf elements.
+    pub elements: usize,
+    /// Links.
+    pub links: usize,
+    /// Bins.
+    pub bins: usize,
+    /// Iterations of the scheme.
+    pub iterations: usize,
+    /// Image size.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// Milliseconds per pass, summed over the render (GPU timestamps for GPU passes).
+    pub passes: BTreeMap<String, f64>,
+    /// Meshing + linking time (ms).
+    pub linking_ms: f64,
+    /// Wall time of the whole render (ms).
+    pub total_ms: f64,
+    /// Relative change of the leaves' I_ex at each iteration.
+    pub residuals: Vec<f64>,
+    /// Departures from the requested configuration.
+    pub fallbacks: Vec<String>,
+}
+
+/// A rendered frame.
+#[derive(Debug, Clone)]
+pub struct Rendered {
+    /// Linear radiance.
+    pub image: Image,
+    /// Statistics.
+    pub stats: RenderStats,
+    /// Display intensities the frame was drawn from (for checks).
+    pub i_total: Table,
+}
+
+/// Relative change between two I_ex tables over the leaves' rows (the solvers' residual).
+pub fn residual(sys: &System, before: &Table, after: &Table) -> f64 {
+    let (mut diff, mut norm) = (0.0, 0.0);
+    for l in &sys.leaves {
+        for (a, b) in after
+            .row(l.node as usize)
+            .iter()
+            .zip(before.row(l.node as usize))
+        {
+            diff += (*a - *b).length_squared();
+            norm += a.length_squared();
+        }
+    }
+    if norm > 0.0 {
+        (diff / norm).sqrt()
+    } else {
+        diff.sqrt()
+    }
+}
+
+fn ms(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+/// Renders `scene` from its camera with its `[solver]` settings.
+pub fn render(scene: &Scene, opts: &RenderOptions, progress: &dyn Progress) -> Result<Rendered> {
+    let t0 = Instant::now();
+    progress.begin("linking", 1);
+    let sys = System::build(scene)?;
+    progress.end();
+    let surfaces = Surfaces::new(scene, &sys);
+    let mut maps = ShadowMaps::new(scene, opts.shadow_map_size);
+    let mut passes = BTreeMap::new();
+    let mut stats = RenderStats {
+        backend: opts.backend,
+        device: "cpu".into(),
+        elements: sys.leaves.len(),
+        links: sys.links.links.len(),
+        bins: sys.bins.count,
+        iterations: scene.solver.iterations,
+        width: scene.camera.width,
+        height: scene.camera.height,
+        passes: BTreeMap::new(),
+        linking_ms: sys.meshing_ms + sys.links.linking_ms,
+        total_ms: 0.0,
+        residuals: Vec::new(),
+        fallbacks: Vec::new(),
+    };
+    let (image, i_total) = match opts.backend {
+        Backend::Cpu => {
+            let t = Instant::now();
+            let caster = RayCaster::new(&sys);
+            if !maps.views.is_empty() {
+                progress.begin("shadow maps", 1);
+                maps.render_cpu(&caster);
+                progress.end();
+            }
+            passes.insert("shadow".to_string(), ms(t));
+            let t = Instant::now();
+            let mut solver = CpuSolver::new(&sys);
+            solver.set_environment(scene.environment);
+            if !scene.lights.is_empty() {
+                solver.direct_in = Some(direct_in_table(&sys, &scene.lights, &maps));
+            }
+            passes.insert("direct".to_string(), ms(t));
+            let t = Instant::now();
+            progress.begin("iterations", scene.solver.iterations as u64);
+            solver.initialize();
+            for _ in 0..scene.solver.iterations {
+                solver.iterate(scene.solver.scheme, scene.solver.antiradiance_steps);
+                progress.advance(1);
+            }
+            progress.end();
+            passes.insert("solve".to_string(), ms(t));
+            stats.residuals = solver.residuals.clone();
+            let t = Instant::now();
+            progress.begin("frame", 1);
+            let img = cpu::render(scene, &sys, &solver.i_total, &maps, &surfaces, &caster);
+            progress.end();
+            passes.insert("frame".to_string(), ms(t));
+            (img, solver.i_total)
+        }
+        Backend::Gpu => {
+            let ctx = crate::gpu::Context::headless(&crate::gpu::ContextOptions {
+                validation: opts.validation,
+                device_name: opts.device.clone(),
+            })?;
+            stats.device = ctx.info.name.clone();
+            let mut solver = crate::gpu::GpuSolver::new(
+                ctx.clone(),
+                &sys,
+                crate::gpu::GpuOptions {
+                    precision: scene.solver.precision,
+                    ..Default::default()
+                },
+            )?;
+            stats.fallbacks.extend(solver.fallbacks().iter().cloned());
+            solver.set_environment(scene.environment)?;
+            let mut frame =
+                crate::gpu::frame::GpuFrame::new(ctx.clone(), scene, &sys, &surfaces, &maps)?;
+            let mut add = |timings: &[(String, f64)]| {
+                for (k, v) in timings {
+                    *passes.entry(k.clone()).or_insert(0.0) += v;
+                }
+            };
+            if !maps.views.is_empty() {
+                progress.begin("shadow maps", 1);
+                frame.render_shadow_maps()?;
+                add(frame.timings());
+                maps.data = frame.read_shadow_maps()?;
+                progress.end();
+                solver.set_direct(&direct_in_table(&sys, &scene.lights, &maps))?;
+            }
+            progress.begin("iterations", scene.solver.iterations as u64);
+            solver.initialize()?;
+            add(solver.timings());
+            let mut before = solver.read_i_ex()?;
+            for _ in 0..scene.solver.iterations {
+                solver.iterate(scene.solver.scheme, scene.solver.antiradiance_steps)?;
+                add(solver.timings());
+                let after = solver.read_i_ex()?;
+                stats.residuals.push(residual(&sys, &before, &after));
+                before = after;
+                progress.advance(1);
+            }
+            progress.end();
+            progress.begin("frame", 1);
+            let img = frame.render(&mut solver)?;
+            add(frame.timings());
+            progress.end();
+            (img, solver.read_i_total()?)
+        }
+    };
+    stats.passes = passes;
+    stats.total_ms = ms(t0);
+    Ok(Rendered {
+        image,
+        stats,
+        i_total,
+    })
+}
