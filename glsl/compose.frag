@@ -35,7 +35,9 @@ void main() {
                     l += s.rgb / s.a;
                 }
             }
-            sum += l;
+            // Discretization can leave a slightly negative indirect term (antiradiance
+            // over-cancelling); radiance is never negative (as in frame/cpu.rs).
+            sum += max(l, vec3(0.0));
         }
     }
     color = vec4(sum / float(ss * ss), 1.0);

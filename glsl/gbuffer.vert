@@ -12,9 +12,13 @@ layout(location = 0) out vec3 world;
 layout(location = 1) flat out uint leaf_out;
 layout(location = 2) out vec3 vertex_radiance;
 
+// Crack-filling input triangle (src/gpu/frame.rs FILLER): drawn 1e-4 of the distance behind,
+// so the elements win wherever they cover.
+const uint AR_FILLER = 0x80000000u;
+
 void main() {
     world = position;
-    leaf_out = leaf;
+    leaf_out = leaf & ~AR_FILLER;
     vec3 acc = vec3(0.0);
     float w = 0.0;
     if (vertex != 0xFFFFFFFFu) {
@@ -29,5 +33,6 @@ void main() {
         }
     }
     vertex_radiance = w > 0.0 ? acc / w : vec3(0.0);
-    gl_Position = pc.view_proj * vec4(position, 1.0);
+    vec3 drawn = (leaf & AR_FILLER) != 0u ? pc.eye.xyz + (position - pc.eye.xyz) * 1.0001 : position;
+    gl_Position = pc.view_proj * vec4(drawn, 1.0);
 }

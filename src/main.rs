@@ -243,6 +243,7 @@ fn main() -> Result<()> {
                 "--shadow-map-size must be 16..=8192"
             );
             let opts = render::RenderOptions {
+                context: None,
                 backend,
                 shadow_map_size,
                 device,

@@ -28,8 +28,10 @@ pub enum Backend {
 }
 
 /// Options of [`render`] beyond the scene's own settings.
-#[derive(Debug, Clone)]
+#[derive(Clone)]
 pub struct RenderOptions {
+    /// Device to render on (GPU backend); `None` creates a headless context.
+    pub context: Option<std::sync::Arc<crate::gpu::Context>>,
     /// Backend.
     pub backend: Backend,
     /// Side of each shadow map (texels).
@@ -43,6 +45,7 @@ pub struct RenderOptions {
 impl Default for RenderOptions {
     fn default() -> Self {
         Self {
+            context: None,
             backend: Backend::Gpu,
             shadow_map_size: 1024,
             device: None,
@@ -132,6 +135,9 @@ pub fn residual(sys: &System, before: &Table, after: &Table) -> f64 {
     }
 }
 
+/// Rows of the stacked shadow-map image (maxImageDimension2D of lavapipe and most GPUs).
+const MAX_SHADOW_ROWS: u32 = 16384;
+
 fn ms(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
@@ -144,6 +150,17 @@ pub fn render(scene: &Scene, opts: &RenderOptions, progress: &dyn Progress) -> R
     progress.end();
     let surfaces = Surfaces::new(scene, &sys);
     let mut maps = ShadowMaps::new(scene, opts.shadow_map_size);
+    // All views share one image of side × (side · views) texels; keep it within 16384 rows.
+    let views = maps.views.len().max(1) as u32;
+    let mut fallbacks = Vec::new();
+    if opts.shadow_map_size * views > MAX_SHADOW_ROWS {
+        let size = MAX_SHADOW_ROWS / views;
+        fallbacks.push(format!(
+            "{views} shadow-map views do not fit {} texels each; using {size}",
+            opts.shadow_map_size
+        ));
+        maps = ShadowMaps::new(scene, size);
+    }
     let mut passes = BTreeMap::new();
     let mut stats = RenderStats {
         backend: opts.backend,
@@ -158,7 +175,7 @@ pub fn render(scene: &Scene, opts: &RenderOptions, progress: &dyn Progress) -> R
         linking_ms: sys.meshing_ms + sys.links.linking_ms,
         total_ms: 0.0,
         residuals: Vec::new(),
-        fallbacks: Vec::new(),
+        fallbacks,
     };
     let (image, i_total) = match opts.backend {
         Backend::Cpu => {
@@ -195,10 +212,13 @@ pub fn render(scene: &Scene, opts: &RenderOptions, progress: &dyn Progress) -> R
             (img, solver.i_total)
         }
         Backend::Gpu => {
-            let ctx = crate::gpu::Context::headless(&crate::gpu::ContextOptions {
-                validation: opts.validation,
-                device_name: opts.device.clone(),
-            })?;
+            let ctx = match &opts.context {
+                Some(c) => c.clone(),
+                None => crate::gpu::Context::headless(&crate::gpu::ContextOptions {
+                    validation: opts.validation,
+                    device_name: opts.device.clone(),
+                })?,
+            };
             stats.device = ctx.info.name.clone();
             let mut solver = crate::gpu::GpuSolver::new(
                 ctx.clone(),

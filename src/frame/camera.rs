@@ -55,8 +55,9 @@ impl View {
         (self.forward + self.right * sx + self.up * sy).normalize()
     }
 
-    /// World → Vulkan clip space (x right, y down, depth 0 at `near` to 1 at `far`), matching
-    /// [`View::ray`]: a point on the ray through (x, y) lands on framebuffer position (x, y).
+    /// World → Vulkan clip space (x right, y down, reversed depth: 1 at `near`, 0 at `far`, for
+    /// float depth precision), matching [`View::ray`]: a point on the ray through (x, y) lands on
+    /// framebuffer position (x, y).
     pub fn view_proj(&self, near: f64, far: f64) -> DMat4 {
         let (r, u, f) = (self.right, self.up, self.forward);
         // Camera space: x right, y down, z forward (depth).
@@ -67,15 +68,20 @@ impl View {
             DVec4::new(-r.dot(self.eye), u.dot(self.eye), -f.dot(self.eye), 1.0),
         );
         let (sx, sy) = (1.0 / (self.tan_half * self.aspect), 1.0 / self.tan_half);
-        let a = far / (far - near);
-        let proj = DMat4::from_cols(
-            DVec4::new(sx, 0.0, 0.0, 0.0),
-            DVec4::new(0.0, sy, 0.0, 0.0),
-            DVec4::new(0.0, 0.0, a, 1.0),
-            DVec4::new(0.0, 0.0, -a * near, 0.0),
-        );
+        let proj = reversed_perspective(sx, sy, near, far);
         proj * view
     }
+}
+
+/// Perspective projection with reversed depth (1 at `near`, 0 at `far`), camera looking down +z.
+pub fn reversed_perspective(sx: f64, sy: f64, near: f64, far: f64) -> DMat4 {
+    let a = near / (far - near);
+    DMat4::from_cols(
+        DVec4::new(sx, 0.0, 0.0, 0.0),
+        DVec4::new(0.0, sy, 0.0, 0.0),
+        DVec4::new(0.0, 0.0, -a, 1.0),
+        DVec4::new(0.0, 0.0, a * far, 0.0),
+    )
 }
 
 #[cfg(test)]
@@ -104,6 +110,8 @@ mod tests {
                 "{x},{y} -> {fx},{fy}"
             );
             assert!(ndc.z > 0.0 && ndc.z < 1.0);
+            let nearer = m * (v.eye + v.ray(x, y) * 2.0).extend(1.0);
+            assert!(nearer.z / nearer.w > ndc.z, "reversed depth");
         }
         // Image right is forward × up; top row looks up.
         assert!(v.ray(64.0, 24.0).dot(v.right) > 0.0);

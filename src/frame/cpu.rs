@@ -114,7 +114,9 @@ pub fn render(
                                         l += acc / wsum;
                                     }
                                 }
-                                l
+                                // Discretization can leave a slightly negative indirect term
+                                // (antiradiance over-cancelling); radiance is never negative.
+                                l.max(DVec3::ZERO)
                             }
                         }
                     };

@@ -26,7 +26,7 @@ const SPOT_SINGLE_VIEW_MAX_DEG: f64 = 75.0;
 /// One rendered view of a light.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ShadowView {
-    /// World → Vulkan clip space (x right, y down, depth 0..1).
+    /// World → Vulkan clip space (x right, y down, reversed depth 1..0).
     pub view_proj: DMat4,
     /// Light position (perspective) or a point on the near plane (orthographic).
     pub origin: DVec3,
@@ -52,14 +52,8 @@ impl ShadowView {
         let right = forward.cross(helper).normalize();
         let up = right.cross(forward);
         let half = half_angle.tan();
-        let a = far / (far - near);
         let view = basis(origin, forward, right, up);
-        let proj = DMat4::from_cols(
-            DVec4::new(1.0 / half, 0.0, 0.0, 0.0),
-            DVec4::new(0.0, 1.0 / half, 0.0, 0.0),
-            DVec4::new(0.0, 0.0, a, 1.0),
-            DVec4::new(0.0, 0.0, -a * near, 0.0),
-        );
+        let proj = super::camera::reversed_perspective(1.0 / half, 1.0 / half, near, far);
         Self {
             view_proj: proj * view,
             origin,
@@ -171,8 +165,8 @@ impl ShadowMaps {
                     let proj = DMat4::from_cols(
                         DVec4::new(1.0 / half, 0.0, 0.0, 0.0),
                         DVec4::new(0.0, 1.0 / half, 0.0, 0.0),
-                        DVec4::new(0.0, 0.0, 1.0 / depth, 0.0),
-                        DVec4::new(0.0, 0.0, 0.0, 1.0),
+                        DVec4::new(0.0, 0.0, -1.0 / depth, 0.0),
+                        DVec4::new(0.0, 0.0, 1.0, 1.0),
                     );
                     views.push(ShadowView {
                         view_proj: proj * view,

@@ -44,6 +44,10 @@ pub struct Surfaces {
     pub adjacency_offsets: Vec<u32>,
     /// Leaf slots around each shared vertex.
     pub adjacency: Vec<u32>,
+    /// Per input triangle (meshes in order): one of its leaves, or `u32::MAX` if none.
+    pub triangle_leaf: Vec<u32>,
+    /// Per input triangle: its corners as shared vertices (vertex mode) or `u32::MAX`.
+    pub triangle_vertices: Vec<[u32; 3]>,
 }
 
 struct UnionFind(Vec<u32>);
@@ -125,6 +129,8 @@ impl Surfaces {
             vertices: Vec::new(),
             adjacency_offsets: Vec::new(),
             adjacency: Vec::new(),
+            triangle_leaf: vec![u32::MAX; normals.len()],
+            triangle_vertices: vec![[u32::MAX; 3]; normals.len()],
         };
         let mut vertex_ids: HashMap<(usize, i64, i64, i64), u32> = HashMap::new();
         let mut lists: Vec<Vec<u32>> = Vec::new();
@@ -137,6 +143,7 @@ impl Surfaces {
                 .map(|c| (*c - e.center).length())
                 .fold(0.0, f64::max)
                 * SPLAT_RADIUS;
+            s.triangle_leaf[tri as usize] = s.triangle_leaf[tri as usize].min(li as u32);
             s.center.push(e.center);
             s.radius.push(r);
             s.surface.push(uf.find(tri));
@@ -157,6 +164,19 @@ impl Surfaces {
                 s.mode.push(MODE_SPLAT);
                 s.max_radius = s.max_radius.max(r);
                 s.corner_vertex.push([u32::MAX; 3]);
+            }
+        }
+        for (mi, m) in scene.meshes.iter().enumerate() {
+            for (ti, t) in m.triangles.iter().enumerate() {
+                let tri = (first_tri[mi] as usize) + ti;
+                if smooth[tri] {
+                    s.triangle_vertices[tri] = t.map(|v| {
+                        vertex_ids
+                            .get(&key(mi, m.positions[v as usize]))
+                            .copied()
+                            .unwrap_or(u32::MAX)
+                    });
+                }
             }
         }
         s.adjacency_offsets.push(0);

@@ -28,6 +28,9 @@ use std::sync::Arc;
 
 const RGBA32F: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 
+/// `CornerVertex::leaf` bit of crack-filling input triangles (`AR_FILLER` in gbuffer.vert).
+pub const FILLER: u32 = 0x8000_0000;
+
 /// Pipelines of the frame passes.
 pub struct FramePipelines {
     /// Shadow-map views: linear distance, depth-tested.
@@ -149,6 +152,26 @@ impl GpuFrame {
                 vertex: surf.corner_vertex[li][k],
             })
             .collect();
+        // The input triangles again, flagged, behind the elements: bisection leaves T-junctions
+        // whose float rounding opens pinhole cracks between elements; these fill them.
+        let mut corners = corners;
+        let mut tri = 0usize;
+        for m in &scene.meshes {
+            for t in &m.triangles {
+                let leaf = surf.triangle_leaf[tri];
+                if leaf != u32::MAX {
+                    for k in 0..3 {
+                        let p = m.positions[t[k] as usize];
+                        corners.push(CornerVertex {
+                            position: [p.x as f32, p.y as f32, p.z as f32],
+                            leaf: leaf | FILLER,
+                            vertex: surf.triangle_vertices[tri][k],
+                        });
+                    }
+                }
+                tri += 1;
+            }
+        }
         let splats: Vec<u32> = (0..sys.leaves.len() as u32)
             .filter(|&li| surf.mode[li as usize] == MODE_SPLAT)
             .collect();
@@ -337,6 +360,31 @@ impl GpuFrame {
             timings: Vec::new(),
         };
         frame.write_set(None);
+        let mut frame = frame;
+        // Without lights the compose pass still binds the (then unused) shadow map: give it a
+        // defined layout once.
+        if frame.views == 0 {
+            let ctx = frame.ctx.clone();
+            let im = &mut frame.images.shadow_map;
+            ctx.submit_and_wait(|cmd| {
+                super::barrier::transition(
+                    &ctx,
+                    cmd,
+                    &mut [(&mut *im, super::barrier::Access::Attachment)],
+                );
+                passes::begin_rendering(
+                    &ctx,
+                    cmd,
+                    &[(&*im, passes::Load::ClearTo(crate::frame::shadow::EMPTY))],
+                );
+                passes::end_rendering(&ctx, cmd);
+                super::barrier::transition(
+                    &ctx,
+                    cmd,
+                    &mut [(&mut *im, super::barrier::Access::Sampled)],
+                );
+            })?;
+        }
         Ok(frame)
     }
 
@@ -512,9 +560,9 @@ impl GpuFrame {
     pub fn read_shadow_maps(&mut self) -> Result<Vec<f32>> {
         let ctx = self.ctx.clone();
         let bytes = ctx.read_image(&mut self.images.shadow_map)?;
-        Ok(decode(vk::Format::R32_SFLOAT, &bytes)
-            .iter()
-            .map(|t| t[0])
+        Ok(bytes
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
             .collect())
     }
 

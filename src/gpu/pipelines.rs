@@ -40,7 +40,7 @@ pub struct PipelineDesc<'a> {
     pub mode: Option<u32>,
     /// Vertex records advance per vertex (true) or per instance (false, the solver's passes).
     pub per_vertex: bool,
-    /// Depth test (less) and write against a [`super::memory::DEPTH_FORMAT`] attachment.
+    /// Reversed depth test (greater: depth 1 is near) and write against a [`super::memory::DEPTH_FORMAT`] attachment.
     pub depth: bool,
 }
 
@@ -241,7 +241,7 @@ pub fn create(
     let depth_state = vk::PipelineDepthStencilStateCreateInfo::default()
         .depth_test_enable(desc.depth)
         .depth_write_enable(desc.depth)
-        .depth_compare_op(vk::CompareOp::LESS);
+        .depth_compare_op(vk::CompareOp::GREATER);
     if desc.depth {
         rendering = rendering.depth_attachment_format(super::memory::DEPTH_FORMAT);
     }

@@ -33,7 +33,7 @@ pub fn record(
             (&im.gbuf_position, Load::Clear),
             (&im.gbuf_vertex, Load::Clear),
         ],
-        Some((&im.gbuf_depth, Load::ClearTo(1.0))),
+        Some((&im.gbuf_depth, Load::Clear)),
     );
     p.bind(pipeline, &constants);
     p.draw(corners, corner_count, 1);

@@ -32,7 +32,7 @@ pub fn record(
         p.ctx,
         p.cmd,
         &[(&im.shadow_map, Load::ClearTo(EMPTY))],
-        Some((&im.shadow_depth, Load::ClearTo(1.0))),
+        Some((&im.shadow_depth, Load::Clear)),
     );
     p.bind(pipeline, &constants);
     for v in 0..views {
