@@ -287,6 +287,28 @@ mod tests {
     use super::*;
 
     #[test]
+    fn glsl_uses_the_same_constants() {
+        let glsl = include_str!("../../glsl/frame.glsl");
+        for (name, v) in [
+            ("NORMAL_OFFSET", NORMAL_OFFSET),
+            ("CONSTANT_BIAS", CONSTANT_BIAS),
+            ("SLOPE_BIAS", SLOPE_BIAS),
+            ("FILTER_RADIUS", FILTER_RADIUS),
+        ] {
+            let line = format!("const float AR_SHADOW_{name} = {v:?};");
+            assert!(glsl.contains(&line), "frame.glsl lacks `{line}`");
+        }
+        let mode = format!(
+            "const uint AR_MODE_VERTEX = {}u;",
+            crate::frame::surfaces::MODE_VERTEX
+        );
+        assert!(glsl.contains(&mode), "frame.glsl lacks `{mode}`");
+        let gbuffer = include_str!("../../glsl/gbuffer.vert");
+        let filler = format!("const uint AR_FILLER = {:#x}u;", crate::gpu::frame::FILLER);
+        assert!(gbuffer.contains(&filler), "gbuffer.vert lacks `{filler}`");
+    }
+
+    #[test]
     fn texel_rays_project_to_their_texels() {
         let mut scene = Scene::empty();
         let m = scene.add_material(crate::scene::Material::diffuse("w", 0.5));

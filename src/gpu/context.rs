@@ -126,6 +126,8 @@ pub struct Context {
     messenger: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
     validation: Arc<ValidationLog>,
     pool: vk::CommandPool,
+    /// The queue and the command pool need external synchronization: one submission at a time.
+    submit_lock: Mutex<()>,
     owned: bool,
     line_ext: bool,
     f16_rounding: std::sync::OnceLock<super::diagnostics::BlendRounding>,
@@ -395,6 +397,7 @@ impl Context {
             messenger,
             validation,
             pool,
+            submit_lock: Mutex::new(()),
             owned,
             line_ext,
             f16_rounding: std::sync::OnceLock::new(),
@@ -440,8 +443,19 @@ impl Context {
         }
     }
 
-    /// Records into a fresh command buffer, submits it to the queue and waits.
+    /// Waits until the device is idle (serialized with submissions: the queue needs external
+    /// synchronization).
+    pub fn wait_idle(&self) {
+        let _one_at_a_time = self.submit_lock.lock().unwrap_or_else(|e| e.into_inner());
+        unsafe {
+            let _ = self.device.device_wait_idle();
+        }
+    }
+
+    /// Records a one-time command buffer, submits it and waits for it (one submission at a time
+    /// per context, so a context may be shared between threads).
     pub fn submit_and_wait(&self, record: impl FnOnce(vk::CommandBuffer)) -> Result<()> {
+        let _one_at_a_time = self.submit_lock.lock().unwrap_or_else(|e| e.into_inner());
         let d = &self.device;
         let cmd = unsafe {
             d.allocate_command_buffers(

@@ -638,8 +638,8 @@ impl GpuFrame {
 impl Drop for GpuFrame {
     fn drop(&mut self) {
         let ctx = self.ctx.clone();
+        ctx.wait_idle();
         unsafe {
-            let _ = ctx.device.device_wait_idle();
             for p in [
                 self.pipes.shadow,
                 self.pipes.gbuffer,

@@ -497,9 +497,7 @@ impl GpuSolver {
 impl Drop for GpuSolver {
     fn drop(&mut self) {
         let ctx = self.ctx.clone();
-        unsafe {
-            let _ = ctx.device.device_wait_idle();
-        }
+        ctx.wait_idle();
         self.profiler.destroy(&ctx);
         self.pipes.destroy(&ctx);
         self.layouts.destroy(&ctx);
