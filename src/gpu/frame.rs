@@ -11,7 +11,9 @@ use super::layout::{
 };
 use super::memory::{Buffer, Image, DEPTH_FORMAT};
 use super::passes::{self, FramePass};
-use super::pipelines::{create, Layouts, PipelineDesc, Target};
+use super::pipelines::{
+    create, descriptor_kinds, descriptor_pool, texel_sampler, Layouts, PipelineDesc, Target,
+};
 use super::profiler::Profiler;
 use super::resources::decode;
 use super::solver::GpuSolver;
@@ -274,15 +276,7 @@ impl GpuFrame {
             splat: c.create_image("splat sums", sw, sh, RGBA32F)?,
             output: c.create_image("frame", w, h, RGBA32F)?,
         };
-        let kinds: Vec<_> = (0..fb::COUNT)
-            .map(|b| {
-                if fb::BUFFERS.contains(&b) {
-                    vk::DescriptorType::STORAGE_BUFFER
-                } else {
-                    vk::DescriptorType::COMBINED_IMAGE_SAMPLER
-                }
-            })
-            .collect();
+        let kinds = descriptor_kinds(fb::COUNT, &fb::BUFFERS);
         let layouts = Layouts::with(
             c,
             "frame",
@@ -290,36 +284,8 @@ impl GpuFrame {
             std::mem::size_of::<FrameConstants>() as u32,
         )?;
         let pipes = Self::pipelines(c, layouts.pipeline)?;
-        let sampler = unsafe {
-            c.device.create_sampler(
-                &vk::SamplerCreateInfo::default()
-                    .mag_filter(vk::Filter::NEAREST)
-                    .min_filter(vk::Filter::NEAREST)
-                    .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-                    .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE),
-                None,
-            )
-        }
-        .vk("creating the frame sampler")?;
-        let sizes = [
-            vk::DescriptorPoolSize {
-                ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-                descriptor_count: fb::COUNT - fb::BUFFERS.len() as u32,
-            },
-            vk::DescriptorPoolSize {
-                ty: vk::DescriptorType::STORAGE_BUFFER,
-                descriptor_count: fb::BUFFERS.len() as u32,
-            },
-        ];
-        let pool = unsafe {
-            c.device.create_descriptor_pool(
-                &vk::DescriptorPoolCreateInfo::default()
-                    .max_sets(1)
-                    .pool_sizes(&sizes),
-                None,
-            )
-        }
-        .vk("creating the frame descriptor pool")?;
+        let sampler = texel_sampler(c, "frame sampler")?;
+        let pool = descriptor_pool(c, &kinds, 1, "frame descriptor pool")?;
         let set = unsafe {
             c.device.allocate_descriptor_sets(
                 &vk::DescriptorSetAllocateInfo::default()

@@ -55,15 +55,7 @@ pub struct Layouts {
 impl Layouts {
     /// Creates the solver's layouts.
     pub fn new(ctx: &Context) -> Result<Self> {
-        let kinds: Vec<_> = (0..binding::COUNT)
-            .map(|b| {
-                if binding::BUFFERS.contains(&b) {
-                    vk::DescriptorType::STORAGE_BUFFER
-                } else {
-                    vk::DescriptorType::COMBINED_IMAGE_SAMPLER
-                }
-            })
-            .collect();
+        let kinds = descriptor_kinds(binding::COUNT, &binding::BUFFERS);
         Self::with(
             ctx,
             "antiradiance",
@@ -123,6 +115,69 @@ impl Layouts {
             ctx.device.destroy_descriptor_set_layout(self.set, None);
         }
     }
+}
+
+/// Descriptor types of bindings `0..count`: storage buffers where listed in `buffers`, combined
+/// image samplers elsewhere (every image is read with `texelFetch`).
+pub fn descriptor_kinds(count: u32, buffers: &[u32]) -> Vec<vk::DescriptorType> {
+    (0..count)
+        .map(|b| {
+            if buffers.contains(&b) {
+                vk::DescriptorType::STORAGE_BUFFER
+            } else {
+                vk::DescriptorType::COMBINED_IMAGE_SAMPLER
+            }
+        })
+        .collect()
+}
+
+/// A nearest, clamp-to-edge sampler for the combined image samplers (reads are `texelFetch`).
+pub fn texel_sampler(ctx: &Context, name: &str) -> Result<vk::Sampler> {
+    let sampler = unsafe {
+        ctx.device.create_sampler(
+            &vk::SamplerCreateInfo::default()
+                .mag_filter(vk::Filter::NEAREST)
+                .min_filter(vk::Filter::NEAREST)
+                .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+                .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE),
+            None,
+        )
+    }
+    .vk(name)?;
+    ctx.name(sampler, name);
+    Ok(sampler)
+}
+
+/// A descriptor pool for `sets` sets whose bindings are `kinds`.
+pub fn descriptor_pool(
+    ctx: &Context,
+    kinds: &[vk::DescriptorType],
+    sets: u32,
+    name: &str,
+) -> Result<vk::DescriptorPool> {
+    let count = |t| kinds.iter().filter(|&&k| k == t).count() as u32 * sets;
+    let sizes: Vec<_> = [
+        vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+        vk::DescriptorType::STORAGE_BUFFER,
+    ]
+    .into_iter()
+    .filter(|&t| count(t) > 0)
+    .map(|ty| vk::DescriptorPoolSize {
+        ty,
+        descriptor_count: count(ty),
+    })
+    .collect();
+    let pool = unsafe {
+        ctx.device.create_descriptor_pool(
+            &vk::DescriptorPoolCreateInfo::default()
+                .max_sets(sets)
+                .pool_sizes(&sizes),
+            None,
+        )
+    }
+    .vk(name)?;
+    ctx.name(pool, name);
+    Ok(pool)
 }
 
 const MAIN: &CStr = c"main";

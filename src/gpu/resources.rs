@@ -265,37 +265,10 @@ impl Resources {
             materials: ctx.upload_buffer("materials", as_bytes(&materials), sb)?,
             bin_centers: ctx.upload_buffer("bin centers", as_bytes(&centers), sb)?,
         };
-        let sampler = unsafe {
-            ctx.device.create_sampler(
-                &vk::SamplerCreateInfo::default()
-                    .mag_filter(vk::Filter::NEAREST)
-                    .min_filter(vk::Filter::NEAREST)
-                    .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
-                    .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE),
-                None,
-            )
-        }
-        .vk("creating the sampler")?;
-        ctx.name(sampler, "texelFetch sampler");
-        let sizes = [
-            vk::DescriptorPoolSize {
-                ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-                descriptor_count: 2 * (binding::COUNT - binding::BUFFERS.len() as u32),
-            },
-            vk::DescriptorPoolSize {
-                ty: vk::DescriptorType::STORAGE_BUFFER,
-                descriptor_count: 2 * binding::BUFFERS.len() as u32,
-            },
-        ];
-        let pool = unsafe {
-            ctx.device.create_descriptor_pool(
-                &vk::DescriptorPoolCreateInfo::default()
-                    .max_sets(2)
-                    .pool_sizes(&sizes),
-                None,
-            )
-        }
-        .vk("creating the descriptor pool")?;
+        let sampler = super::pipelines::texel_sampler(ctx, "texelFetch sampler")?;
+        let kinds = super::pipelines::descriptor_kinds(binding::COUNT, &binding::BUFFERS);
+        let pool =
+            super::pipelines::descriptor_pool(ctx, &kinds, 2, "antiradiance descriptor pool")?;
         Ok(Self {
             layout,
             format,
