@@ -307,6 +307,29 @@ pub fn end_rendering(ctx: &Context, cmd: vk::CommandBuffer) {
     unsafe { ctx.device.cmd_end_rendering(cmd) };
 }
 
+/// Binds `pipeline` and set 0 of `layout`, and pushes `constants` to both stages.
+fn bind_with_constants(
+    ctx: &Context,
+    cmd: vk::CommandBuffer,
+    layout: vk::PipelineLayout,
+    set: vk::DescriptorSet,
+    pipeline: vk::Pipeline,
+    constants: &[u8],
+) {
+    let d = &ctx.device;
+    unsafe {
+        d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
+        d.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::GRAPHICS, layout, 0, &[set], &[]);
+        d.cmd_push_constants(
+            cmd,
+            layout,
+            vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
+            0,
+            constants,
+        );
+    }
+}
+
 /// Everything a pass records with.
 pub struct Pass<'a> {
     /// Device.
@@ -333,25 +356,14 @@ impl Pass<'_> {
             quad_width,
             ..self.constants
         };
-        let d = &self.ctx.device;
-        unsafe {
-            d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
-            d.cmd_bind_descriptor_sets(
-                self.cmd,
-                vk::PipelineBindPoint::GRAPHICS,
-                self.layout,
-                0,
-                &[self.set],
-                &[],
-            );
-            d.cmd_push_constants(
-                self.cmd,
-                self.layout,
-                vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
-                0,
-                super::layout::as_bytes(std::slice::from_ref(&c)),
-            );
-        }
+        bind_with_constants(
+            self.ctx,
+            self.cmd,
+            self.layout,
+            self.set,
+            pipeline,
+            super::layout::as_bytes(std::slice::from_ref(&c)),
+        );
     }
 
     /// Draws `instances` primitives of `vertices` vertices from `buffer`.
@@ -385,19 +397,14 @@ pub struct FramePass<'a> {
 impl FramePass<'_> {
     /// Binds `pipeline`, the frame set and `constants`.
     pub fn bind(&self, pipeline: vk::Pipeline, constants: &FrameConstants) {
-        let d = &self.ctx.device;
-        unsafe {
-            d.cmd_bind_pipeline(self.cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
-            d.cmd_bind_descriptor_sets(
-                self.cmd,
-                vk::PipelineBindPoint::GRAPHICS,
-                self.layout,
-                0,
-                &[self.set],
-                &[],
-            );
-            self.push(constants);
-        }
+        bind_with_constants(
+            self.ctx,
+            self.cmd,
+            self.layout,
+            self.set,
+            pipeline,
+            super::layout::as_bytes(std::slice::from_ref(constants)),
+        );
     }
 
     /// Updates the push constants only.
