@@ -66,6 +66,9 @@ pub enum Error {
         /// What went wrong.
         message: String,
     },
+    /// A run option (command-line argument or API parameter) is out of range or inconsistent.
+    #[error("{0}")]
+    Invalid(String),
     /// A GLSL shader failed to compile; the message names the file and line.
     #[error("shader {file}: {message}")]
     Shader {

@@ -70,6 +70,39 @@ enum Command {
         #[arg(long)]
         device: Option<String>,
     },
+    /// Path-traced ground truth (unbiased, CPU, all cores) to EXR, with its direct part and
+    /// per-pixel standard error beside it (REF.direct.exr, REF.stderr.exr).
+    Reference {
+        /// Scene TOML (default: the bundled Cornell box).
+        scene: Option<PathBuf>,
+        /// Samples per pixel.
+        #[arg(long, default_value_t = 256)]
+        spp: u32,
+        /// EXR output (linear float RGB radiance).
+        #[arg(long, default_value = "reference.exr")]
+        exr: PathBuf,
+        /// Reflections per path (default: unlimited, ended by Russian roulette without bias).
+        #[arg(long)]
+        max_bounces: Option<u32>,
+        /// Seed: the same seed gives the same image on any number of threads.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Override `camera.width`.
+        #[arg(long)]
+        width: Option<u32>,
+        /// Override `camera.height`.
+        #[arg(long)]
+        height: Option<u32>,
+        /// Also write a PNG (exposure in stops via --exposure).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// PNG exposure in stops.
+        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+        exposure: f64,
+        /// Write the convergence figures as JSON to this file.
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
     /// Time the GPU passes (global, push, local, pull) per frame, like the paper's Table 2.
     Profile {
         /// Scene TOML (default: the bundled Cornell box).
@@ -173,8 +206,74 @@ fn apply_overrides(
     Ok(())
 }
 
+fn set_size(s: &mut Scene, width: Option<u32>, height: Option<u32>) -> Result<()> {
+    if let Some(w) = width {
+        anyhow::ensure!((1..=16384).contains(&w), "--width must be 1..=16384");
+        s.camera.width = w;
+    }
+    if let Some(h) = height {
+        anyhow::ensure!((1..=16384).contains(&h), "--height must be 1..=16384");
+        s.camera.height = h;
+    }
+    Ok(())
+}
+
+fn write_json(path: &Option<PathBuf>, value: &impl serde::Serialize) -> Result<()> {
+    if let Some(p) = path {
+        std::fs::write(p, serde_json::to_string_pretty(value)?)
+            .with_context(|| format!("writing {}", p.display()))?;
+    }
+    Ok(())
+}
+
 fn main() -> Result<()> {
     match Cli::parse().command {
+        Command::Reference {
+            scene,
+            spp,
+            exr,
+            max_bounces,
+            seed,
+            width,
+            height,
+            output,
+            exposure,
+            json,
+        } => {
+            let mut s = load(scene)?;
+            set_size(&mut s, width, height)?;
+            let opts = antiradiance::reference::ReferenceOptions {
+                spp,
+                max_bounces,
+                seed,
+            };
+            let r = antiradiance::reference::render_reference(&s, &opts, &Bars::default())?;
+            let st = &r.stats;
+            eprintln!(
+                "{spp} spp on {} threads in {:.1} s; standard error: {:.3}% of the mean (image), \
+                 per pixel median {:.3}%, 95th percentile {:.3}%",
+                st.threads,
+                st.total_ms / 1e3,
+                st.mean_relative_std_error * 100.0,
+                st.median_pixel_relative_std_error * 100.0,
+                st.p95_pixel_relative_std_error * 100.0
+            );
+            let (direct, stderr) = antiradiance::reference::sibling_paths(&exr);
+            r.image.write_exr(&exr)?;
+            r.direct.write_exr(&direct)?;
+            r.std_error.write_exr(&stderr)?;
+            eprintln!(
+                "wrote {}, {}, {}",
+                exr.display(),
+                direct.display(),
+                stderr.display()
+            );
+            if let Some(p) = output {
+                r.image.write_png(&p, exposure)?;
+                eprintln!("wrote {}", p.display());
+            }
+            write_json(&json, st)?;
+        }
         Command::Profile {
             scene,
             frames,
@@ -192,10 +291,7 @@ fn main() -> Result<()> {
             })?;
             let report = antiradiance::profile::profile(ctx, &s, frames, warmup)?;
             print!("{}", report.text());
-            if let Some(p) = json {
-                std::fs::write(&p, serde_json::to_string_pretty(&report)?)
-                    .with_context(|| format!("writing {}", p.display()))?;
-            }
+            write_json(&json, &report)?;
         }
         Command::Info { scene, json } => {
             let s = load(scene)?;
@@ -225,14 +321,7 @@ fn main() -> Result<()> {
         } => {
             let mut s = load(scene)?;
             apply_overrides(&mut s, iterations, bins, scheme, precision)?;
-            if let Some(w) = width {
-                anyhow::ensure!((1..=16384).contains(&w), "--width must be 1..=16384");
-                s.camera.width = w;
-            }
-            if let Some(h) = height {
-                anyhow::ensure!((1..=16384).contains(&h), "--height must be 1..=16384");
-                s.camera.height = h;
-            }
+            set_size(&mut s, width, height)?;
             let backend = match backend.as_str() {
                 "gpu" => render::Backend::Gpu,
                 "cpu" => render::Backend::Cpu,
@@ -269,10 +358,7 @@ fn main() -> Result<()> {
                 r.image.write_png(&p, exposure)?;
                 eprintln!("wrote {}", p.display());
             }
-            if let Some(p) = json {
-                std::fs::write(&p, serde_json::to_string_pretty(&r.stats)?)
-                    .with_context(|| format!("writing {}", p.display()))?;
-            }
+            write_json(&json, &r.stats)?;
         }
     }
     Ok(())

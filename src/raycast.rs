@@ -1,5 +1,7 @@
-//! Ray casting against the leaf elements (the `bvh` crate's BVH, f64 triangle tests): the CPU
-//! frame's camera rays, the CPU shadow maps and, later, the path-traced reference.
+//! Ray casting against triangles (the `bvh` crate's BVH, f64 triangle tests): the leaf elements
+//! for the CPU frame's camera rays and shadow maps, the input triangles for the path-traced
+//! reference. Closest hits walk the BVH nearest box first and stop once no box can hold a nearer
+//! hit; occlusion queries stop at the first hit.
 
 use crate::system::System;
 use bvh::aabb::{Aabb, Bounded};
@@ -12,7 +14,8 @@ use nalgebra::{Point3, Vector3};
 /// A ray–triangle hit.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Hit {
-    /// Leaf slot (index into [`System::leaves`]) of the element hit.
+    /// Index of the triangle hit: the leaf slot (index into [`System::leaves`]) for
+    /// [`RayCaster::new`], the index into the list given to [`RayCaster::from_triangles`].
     pub leaf: u32,
     /// Distance along the (unit) ray direction.
     pub t: f64,
@@ -87,56 +90,105 @@ fn intersect(c: &[DVec3; 3], o: DVec3, d: DVec3, t_min: f64) -> Option<(f64, f64
     (t > t_min).then_some((t, u, v))
 }
 
+/// Distance along `d` at which the ray enters `b` (0 when it starts inside), in f64.
+fn entry(b: &Aabb<f32, 3>, o: DVec3, d: DVec3) -> f64 {
+    let mut t0 = 0.0f64;
+    for k in 0..3 {
+        let (lo, hi) = (b.min[k] as f64, b.max[k] as f64);
+        if d[k] != 0.0 {
+            let (a, c) = ((lo - o[k]) / d[k], (hi - o[k]) / d[k]);
+            t0 = t0.max(a.min(c));
+        }
+    }
+    t0
+}
+
 impl RayCaster {
     /// Builds the BVH over the leaves of `sys` (in leaf-slot order).
     pub fn new(sys: &System) -> Self {
-        let mut shapes: Vec<Shape> = sys
-            .leaves
-            .iter()
-            .map(|l| {
-                let e = sys.hierarchy.element(l.node).expect("leaf has an element") as usize;
-                Shape {
-                    corners: sys.elements[e].corners,
-                    node: 0,
-                }
-            })
+        Self::from_triangles(
+            sys.leaves
+                .iter()
+                .map(|l| {
+                    let e = sys.hierarchy.element(l.node).expect("leaf has an element") as usize;
+                    sys.elements[e].corners
+                })
+                .collect(),
+        )
+    }
+
+    /// Builds the BVH over `triangles`; hits report indices into this list.
+    pub fn from_triangles(triangles: Vec<[DVec3; 3]>) -> Self {
+        let mut shapes: Vec<Shape> = triangles
+            .into_iter()
+            .map(|corners| Shape { corners, node: 0 })
             .collect();
         let bvh = Bvh::build(&mut shapes);
         Self { shapes, bvh }
     }
 
-    fn candidates(&self, o: DVec3, d: DVec3, mut f: impl FnMut(usize, &Shape)) {
-        let ray = Ray::new(
+    fn ray(o: DVec3, d: DVec3) -> Ray<f32, 3> {
+        Ray::new(
             Point3::new(o.x as f32, o.y as f32, o.z as f32),
             Vector3::new(d.x as f32, d.y as f32, d.z as f32),
-        );
-        for s in self.bvh.traverse_iterator(&ray, &self.shapes) {
-            // Index of `s` in `shapes` (the iterator yields references into the slice).
-            let i = (s as *const Shape as usize - self.shapes.as_ptr() as usize)
-                / std::mem::size_of::<Shape>();
-            f(i, s);
-        }
+        )
+    }
+
+    fn index(&self, s: &Shape) -> usize {
+        // The iterators yield references into `shapes`.
+        (s as *const Shape as usize - self.shapes.as_ptr() as usize) / std::mem::size_of::<Shape>()
     }
 
     /// Nearest hit along the unit direction `d` with `t_min < t < t_max`.
     pub fn closest(&self, o: DVec3, d: DVec3, t_min: f64, t_max: f64) -> Option<Hit> {
+        if self.shapes.is_empty() {
+            return None;
+        }
+        let ray = Self::ray(o, d);
         let mut best: Option<Hit> = None;
-        self.candidates(o, d, |i, s| {
+        // Shapes come in order of their boxes' entry distance: once a box starts beyond the
+        // best hit, none of the rest can be nearer.
+        for s in self.bvh.nearest_traverse_iterator(&ray, &self.shapes) {
+            let limit = best.map_or(t_max, |b| b.t);
+            if entry(&s.aabb(), o, d) > limit {
+                break;
+            }
             if let Some((t, u, v)) = intersect(&s.corners, o, d, t_min) {
-                if t < t_max && best.is_none_or(|b| t < b.t) {
+                if t < limit {
                     best = Some(Hit {
-                        leaf: i as u32,
+                        leaf: self.index(s) as u32,
                         t,
                         u,
                         v,
                     });
                 }
             }
-        });
+        }
         best
     }
 
-    /// Corners of the element in leaf slot `leaf`.
+    /// True when something lies along the unit direction `d` with `t_min < t < t_max`.
+    pub fn occluded(&self, o: DVec3, d: DVec3, t_min: f64, t_max: f64) -> bool {
+        if self.shapes.is_empty() {
+            return false;
+        }
+        let ray = Self::ray(o, d);
+        self.bvh
+            .traverse_iterator(&ray, &self.shapes)
+            .any(|s| intersect(&s.corners, o, d, t_min).is_some_and(|(t, _, _)| t < t_max))
+    }
+
+    /// Number of triangles.
+    pub fn len(&self) -> usize {
+        self.shapes.len()
+    }
+
+    /// True when there are no triangles.
+    pub fn is_empty(&self) -> bool {
+        self.shapes.is_empty()
+    }
+
+    /// Corners of triangle `leaf` (the element in leaf slot `leaf` for [`RayCaster::new`]).
     pub fn corners(&self, leaf: u32) -> &[DVec3; 3] {
         &self.shapes[leaf as usize].corners
     }
@@ -153,5 +205,49 @@ mod tests {
         assert!((t - 2.0).abs() < 1e-12 && (u - 0.25).abs() < 1e-12 && (v - 0.5).abs() < 1e-12);
         assert!(intersect(&c, DVec3::new(0.25, 0.5, -2.0), DVec3::Z, 0.0).is_some());
         assert!(intersect(&c, DVec3::new(0.75, 0.5, 2.0), -DVec3::Z, 0.0).is_none());
+    }
+
+    #[test]
+    fn closest_hit_is_the_nearest_of_many_and_matches_brute_force() {
+        // A stack of 40 parallel squares, randomly jittered, queried along many rays.
+        let mut tris = Vec::new();
+        for k in 0..40 {
+            let z = k as f64 * 0.1 + 0.013 * ((k * 7 % 5) as f64);
+            let q = [
+                DVec3::new(-1.0, -1.0, z),
+                DVec3::new(1.0, -1.0, z),
+                DVec3::new(1.0, 1.0, z),
+                DVec3::new(-1.0, 1.0, z),
+            ];
+            tris.push([q[0], q[1], q[2]]);
+            tris.push([q[0], q[2], q[3]]);
+        }
+        let rc = RayCaster::from_triangles(tris.clone());
+        for i in 0..200 {
+            let a = i as f64 * 0.61;
+            let o = DVec3::new(0.3 * a.sin(), 0.3 * a.cos(), -1.0 + 6.0 * ((i % 3) as f64));
+            let d = DVec3::new(
+                0.2 * a.cos(),
+                0.15 * a.sin(),
+                if i % 3 == 0 { 1.0 } else { -1.0 },
+            )
+            .normalize();
+            let brute = tris
+                .iter()
+                .filter_map(|c| intersect(c, o, d, 1e-9))
+                .map(|h| h.0)
+                .fold(f64::INFINITY, f64::min);
+            let got = rc
+                .closest(o, d, 1e-9, f64::INFINITY)
+                .map_or(f64::INFINITY, |h| h.t);
+            assert!(
+                (got - brute).abs() < 1e-12 || got == brute,
+                "ray {i}: {got} vs {brute}"
+            );
+            assert_eq!(rc.occluded(o, d, 1e-9, f64::INFINITY), brute.is_finite());
+            if brute.is_finite() {
+                assert!(!rc.occluded(o, d, 1e-9, brute * 0.999));
+            }
+        }
     }
 }

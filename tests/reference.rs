@@ -1,0 +1,280 @@
+//! The path-traced reference against analytic answers: the closed uniform box with an occluder
+//! (Le/(1−ρ) everywhere), a plane under a point light, and a glossy plane under a constant
+//! environment (the Phong lobe's sampling and density); determinism for a seed.
+
+mod common;
+
+use antiradiance::frame::camera::View;
+use antiradiance::reference::{render_reference, Reference, ReferenceOptions};
+use antiradiance::render::Silent;
+use antiradiance::scene::{Light, Material, Scene};
+use common::*;
+use glam::DVec3;
+use std::f64::consts::PI;
+
+fn trace(s: &Scene, spp: u32, max_bounces: Option<u32>) -> Reference {
+    let opts = ReferenceOptions {
+        spp,
+        max_bounces,
+        seed: 7,
+    };
+    render_reference(s, &opts, &Silent).unwrap()
+}
+
+fn lum(p: [f32; 3]) -> f64 {
+    (p[0] as f64 + p[1] as f64 + p[2] as f64) / 3.0
+}
+
+#[test]
+fn closed_uniform_box_converges_to_le_over_one_minus_rho() {
+    let (rho, le) = (0.6, 1.0);
+    let mut s = uniform_enclosure(rho, le, 32, 0.5);
+    s.camera.eye = DVec3::new(0.5, 0.6, 0.95);
+    s.camera.target = DVec3::new(0.45, 0.35, 0.0);
+    s.camera.fov_y_deg = 70.0;
+    s.camera.width = 32;
+    s.camera.height = 32;
+    let want = le / (1.0 - rho);
+    let r = trace(&s, 64, None);
+    let mean = r.image.pixels.iter().map(|&p| lum(p)).sum::<f64>() / r.image.pixels.len() as f64;
+    println!(
+        "mean {mean:.4} (want {want:.4}), image std error {:.3}%",
+        r.stats.mean_relative_std_error * 100.0
+    );
+    assert!((mean - want).abs() < 0.01 * want, "mean {mean} vs {want}");
+    // Each pixel within 4 of its own standard errors (plus a float margin) of the answer.
+    let outside = r
+        .image
+        .pixels
+        .iter()
+        .zip(&r.std_error.pixels)
+        .filter(|(p, e)| (lum(**p) - want).abs() > 4.0 * lum(**e) + 1e-4)
+        .count();
+    assert!(
+        outside <= r.image.pixels.len() / 100,
+        "{outside} pixels beyond 4σ"
+    );
+    // The direct part is emission plus one bounce of it: Le(1+ρ) everywhere.
+    let d = r.direct.pixels.iter().map(|&p| lum(p)).sum::<f64>() / r.direct.pixels.len() as f64;
+    assert!(
+        (d - le * (1.0 + rho)).abs() < 0.01 * le * (1.0 + rho),
+        "direct {d}"
+    );
+    // A bounce limit truncates the Neumann series: B reflections give Le·Σ_{k≤B} ρ^k.
+    let r2 = trace(&s, 64, Some(2));
+    let m2 = r2.image.pixels.iter().map(|&p| lum(p)).sum::<f64>() / r2.image.pixels.len() as f64;
+    let w2 = le * (1.0 + rho + rho * rho);
+    assert!((m2 - w2).abs() < 0.01 * w2, "2 bounces: {m2} vs {w2}");
+}
+
+/// A lone diffuse plane under one point light: L = kd/π · I cos θ / r² at every pixel.
+#[test]
+fn plane_under_a_point_light_matches_the_analytic_radiance() {
+    let kd = 0.7;
+    let mut s = Scene::empty();
+    let m = s.add_material(Material::diffuse("plane", kd));
+    let h = 40.0;
+    quad(
+        &mut s,
+        "plane",
+        [
+            DVec3::new(-h, 0.0, h),
+            DVec3::new(h, 0.0, h),
+            DVec3::new(h, 0.0, -h),
+            DVec3::new(-h, 0.0, -h),
+        ],
+        m,
+    );
+    let (pos, i) = (DVec3::new(0.4, 1.1, -0.2), 5.0);
+    s.lights = vec![Light::Point {
+        position: pos,
+        intensity: DVec3::splat(i),
+    }];
+    s.camera.eye = DVec3::new(0.0, 3.0, 3.0);
+    s.camera.target = DVec3::ZERO;
+    s.camera.fov_y_deg = 50.0;
+    s.camera.width = 40;
+    s.camera.height = 40;
+    let r = trace(&s, 64, None);
+    let view = View::new(&s.camera);
+    let mut worst: f64 = 0.0;
+    let (mut sum_got, mut sum_want) = (0.0, 0.0);
+    for y in 0..40 {
+        for x in 0..40 {
+            // Average the analytic radiance over the pixel (the tracer's box filter).
+            let k = 8;
+            let mut want = 0.0;
+            for j in 0..k {
+                for i2 in 0..k {
+                    let d = view.ray(
+                        x as f64 + (i2 as f64 + 0.5) / k as f64,
+                        y as f64 + (j as f64 + 0.5) / k as f64,
+                    );
+                    let t = -view.eye.y / d.y;
+                    let p = view.eye + d * t;
+                    let v = pos - p;
+                    want += kd / PI * i * (v.y / v.length()) / v.length_squared();
+                }
+            }
+            want /= (k * k) as f64;
+            // The only noise is where in the pixel each sample lands: allow 4 standard errors.
+            let got = lum(r.image.at(x, y));
+            let sigma = lum(r.std_error.at(x, y));
+            worst = worst.max((got - want).abs() / (4.0 * sigma + 0.002 * want));
+            sum_got += got;
+            sum_want += want;
+        }
+    }
+    println!(
+        "worst pixel at {worst:.2} of its bound; image mean off by {:.4}%",
+        (sum_got / sum_want - 1.0) * 100.0
+    );
+    assert!(worst <= 1.0, "a pixel is off by {worst:.2}× (4σ + 0.2%)");
+    assert!((sum_got / sum_want - 1.0).abs() < 0.002);
+}
+
+/// A glossy plane under a constant environment, seen along its normal: L = E·(kd + ks·A) with A
+/// the lobe's directional albedo there, by quadrature. Reached only by BSDF sampling, so this
+/// checks the lobe's sampling and density.
+#[test]
+fn glossy_plane_under_environment_matches_quadrature() {
+    let (kd, ks, ns, env) = (0.3, 0.5, 30.0, 2.0);
+    let mut s = Scene::empty();
+    let m = s.add_material(Material {
+        ks: DVec3::splat(ks),
+        ns,
+        ..Material::diffuse("gloss", kd)
+    });
+    let h = 50.0;
+    quad(
+        &mut s,
+        "plane",
+        [
+            DVec3::new(-h, 0.0, h),
+            DVec3::new(h, 0.0, h),
+            DVec3::new(h, 0.0, -h),
+            DVec3::new(-h, 0.0, -h),
+        ],
+        m,
+    );
+    s.environment = DVec3::splat(env);
+    s.camera.eye = DVec3::new(0.0, 2.0, 0.0);
+    s.camera.target = DVec3::ZERO;
+    s.camera.up = DVec3::Z;
+    s.camera.fov_y_deg = 2.0;
+    s.camera.width = 8;
+    s.camera.height = 8;
+    let r = trace(&s, 512, None);
+    // Directional albedo of the lobe for light leaving along the normal.
+    let steps = 4000;
+    let mut a = 0.0;
+    for k in 0..steps {
+        let th = (k as f64 + 0.5) / steps as f64 * PI / 2.0;
+        a += (ns + 2.0) / (2.0 * PI)
+            * th.cos().powf(ns)
+            * th.cos()
+            * 2.0
+            * PI
+            * th.sin()
+            * (PI / 2.0 / steps as f64);
+    }
+    let want = env * (kd + ks * a);
+    let mean = r.image.pixels.iter().map(|&p| lum(p)).sum::<f64>() / 64.0;
+    println!("mean {mean:.4}, want {want:.4} (lobe albedo {a:.4})");
+    assert!((mean - want).abs() < 0.01 * want, "{mean} vs {want}");
+}
+
+#[test]
+fn same_seed_same_image() {
+    let mut s = uniform_enclosure(0.5, 1.0, 32, 0.5);
+    s.camera.eye = DVec3::new(0.5, 0.5, 0.9);
+    s.camera.target = DVec3::new(0.5, 0.5, 0.0);
+    s.camera.width = 16;
+    s.camera.height = 12;
+    let a = trace(&s, 4, None);
+    let b = trace(&s, 4, None);
+    assert_eq!(a.image, b.image);
+    let c = render_reference(
+        &s,
+        &ReferenceOptions {
+            spp: 4,
+            max_bounces: None,
+            seed: 8,
+        },
+        &Silent,
+    )
+    .unwrap();
+    assert_ne!(a.image, c.image, "another seed gives other samples");
+}
+
+/// A square emitter above a glossy plane, one bounce: the radiance toward the camera is the
+/// integral over the emitter of f·Le·cos θ·cos θ_l / r², by quadrature. Light sampling and BSDF
+/// sampling meet here through MIS.
+#[test]
+fn area_light_on_a_glossy_plane_matches_quadrature() {
+    let (kd, ks, ns, le) = (0.4, 0.4, 20.0, 3.0);
+    let mut s = Scene::empty();
+    let m = s.add_material(Material {
+        ks: DVec3::splat(ks),
+        ns,
+        ..Material::diffuse("gloss", kd)
+    });
+    let e = s.add_material(Material {
+        ke: DVec3::splat(le),
+        ..Material::diffuse("lamp", 0.0)
+    });
+    let h = 20.0;
+    quad(
+        &mut s,
+        "plane",
+        [
+            DVec3::new(-h, 0.0, h),
+            DVec3::new(h, 0.0, h),
+            DVec3::new(h, 0.0, -h),
+            DVec3::new(-h, 0.0, -h),
+        ],
+        m,
+    );
+    // Facing down (counter-clockwise seen from below), centered above (0.3, ·, 0).
+    let (c, half, y) = (DVec3::new(0.3, 1.0, 0.0), 0.25, 1.0);
+    quad(
+        &mut s,
+        "lamp",
+        [
+            DVec3::new(c.x - half, y, c.z - half),
+            DVec3::new(c.x + half, y, c.z - half),
+            DVec3::new(c.x + half, y, c.z + half),
+            DVec3::new(c.x - half, y, c.z + half),
+        ],
+        e,
+    );
+    let eye = DVec3::new(-0.6, 0.5, 0.0);
+    s.camera.eye = eye;
+    s.camera.target = DVec3::ZERO;
+    s.camera.fov_y_deg = 0.2;
+    s.camera.width = 4;
+    s.camera.height = 4;
+    let r = trace(&s, 4096, Some(1));
+    let wo = (eye - DVec3::ZERO).normalize();
+    let (n, k) = (DVec3::Y, 400);
+    let mut want = 0.0;
+    for i in 0..k {
+        for j in 0..k {
+            let q = DVec3::new(
+                c.x - half + (i as f64 + 0.5) / k as f64 * 2.0 * half,
+                y,
+                c.z - half + (j as f64 + 0.5) / k as f64 * 2.0 * half,
+            );
+            let v = q.normalize();
+            let r2 = q.length_squared();
+            let travel = -v;
+            let refl = travel - 2.0 * travel.dot(n) * n;
+            let lobe = (ns + 2.0) / (2.0 * PI) * refl.dot(wo).max(0.0).powf(ns);
+            let f = kd / PI + ks * lobe;
+            want += f * le * v.dot(n) * v.y / r2 * (2.0 * half / k as f64).powi(2);
+        }
+    }
+    let got = r.image.pixels.iter().map(|&p| lum(p)).sum::<f64>() / 16.0;
+    println!("got {got:.5}, want {want:.5}");
+    assert!((got - want).abs() < 0.01 * want, "{got} vs {want}");
+}
