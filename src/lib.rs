@@ -25,6 +25,7 @@ pub mod reference;
 pub mod render;
 pub mod scene;
 pub mod solver;
+pub mod study;
 pub mod system;
 
 pub use error::{Error, Result};

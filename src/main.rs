@@ -103,6 +103,54 @@ enum Command {
         #[arg(long)]
         json: Option<PathBuf>,
     },
+    /// Error against run time: antiradiance over a sweep of settings and the path tracer at
+    /// increasing spp, measured against a reference; writes study.csv, error-vs-time.png and
+    /// convergence.png into --out.
+    Study {
+        /// Scene TOML (default: the bundled Cornell box).
+        scene: Option<PathBuf>,
+        /// Reference EXR from `antiradiance reference` (its REF.direct.exr, when present, gives
+        /// the indirect-only error). The study renders at the reference's size.
+        #[arg(long)]
+        reference: PathBuf,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+        /// Antiradiance is measured after every iteration 1..=N.
+        #[arg(long, default_value_t = 16)]
+        iterations: usize,
+        /// Bin counts to try, comma-separated (default 32,64,128,256,512).
+        #[arg(long, value_delimiter = ',')]
+        bins: Option<Vec<usize>>,
+        /// Element sizes to try, comma-separated (default: the scene's ×2, ×1, ×0.5).
+        #[arg(long, value_delimiter = ',')]
+        element_sizes: Option<Vec<f64>>,
+        /// Path tracer sample counts, comma-separated (default 1,4,16,64,256).
+        #[arg(long, value_delimiter = ',')]
+        spp: Option<Vec<u32>>,
+        /// Skip the run with the other iteration scheme.
+        #[arg(long)]
+        one_scheme: bool,
+        /// Skip the run with the other precision.
+        #[arg(long)]
+        one_precision: bool,
+        /// gpu or cpu (antiradiance backend).
+        #[arg(long, default_value = "gpu")]
+        backend: String,
+        /// Vulkan device whose name contains this.
+        #[arg(long)]
+        device: Option<String>,
+    },
+    /// Error metrics of one EXR against a reference EXR (e.g. a Mitsuba 3 render).
+    Compare {
+        /// Image to measure.
+        test: PathBuf,
+        /// Reference image.
+        reference: PathBuf,
+        /// Write a difference picture (red: brighter, blue: darker; full at ±50%).
+        #[arg(long)]
+        diff: Option<PathBuf>,
+    },
     /// Time the GPU passes (global, push, local, pull) per frame, like the paper's Table 2.
     Profile {
         /// Scene TOML (default: the bundled Cornell box).
@@ -226,8 +274,69 @@ fn write_json(path: &Option<PathBuf>, value: &impl serde::Serialize) -> Result<(
     Ok(())
 }
 
+fn parse_backend(b: &str) -> Result<render::Backend> {
+    Ok(match b {
+        "gpu" => render::Backend::Gpu,
+        "cpu" => render::Backend::Cpu,
+        x => anyhow::bail!("--backend must be gpu or cpu, got {x}"),
+    })
+}
+
 fn main() -> Result<()> {
     match Cli::parse().command {
+        Command::Compare {
+            test,
+            reference,
+            diff,
+        } => {
+            let (t, r) = (
+                antiradiance::frame::Image::read_exr(&test)?,
+                antiradiance::frame::Image::read_exr(&reference)?,
+            );
+            let m = antiradiance::metrics::compare(&t, &r)?;
+            println!("{}", serde_json::to_string_pretty(&m)?);
+            if let Some(p) = diff {
+                antiradiance::metrics::difference_map(&t, &r, 0.5)?.write_png(&p, 0.0)?;
+                eprintln!("wrote {}", p.display());
+            }
+        }
+        Command::Study {
+            scene,
+            reference,
+            out,
+            iterations,
+            bins,
+            element_sizes,
+            spp,
+            one_scheme,
+            one_precision,
+            backend,
+            device,
+        } => {
+            let s = load(scene)?;
+            let truth = antiradiance::study::Truth::load(&reference)?;
+            if truth.direct.is_none() {
+                eprintln!("note: no REF.direct.exr beside the reference; no indirect-only error");
+            }
+            let mut o = antiradiance::study::StudyOptions::defaults(&s, out.clone());
+            o.iterations = iterations;
+            o.bins = bins.unwrap_or(o.bins);
+            o.element_sizes = element_sizes.unwrap_or(o.element_sizes);
+            o.spp = spp.unwrap_or(o.spp);
+            o.both_schemes = !one_scheme;
+            o.both_precisions = !one_precision;
+            o.render.backend = parse_backend(&backend)?;
+            o.render.device = device;
+            let rows = antiradiance::study::run(&s, &truth, &o, &Bars::default(), &mut |r| {
+                eprintln!("{}", r.summary());
+            })?;
+            let cross = antiradiance::study::write(&rows, &out)?;
+            eprintln!("full image, relative RMSE: {cross}");
+            eprintln!(
+                "wrote {}/study.csv, error-vs-time.png, convergence.png",
+                out.display()
+            );
+        }
         Command::Reference {
             scene,
             spp,
@@ -250,24 +359,31 @@ fn main() -> Result<()> {
             let r = antiradiance::reference::render_reference(&s, &opts, &Bars::default())?;
             let st = &r.stats;
             eprintln!(
-                "{spp} spp on {} threads in {:.1} s; standard error: {:.3}% of the mean (image), \
-                 per pixel median {:.3}%, 95th percentile {:.3}%",
+                "{spp} spp on {} threads in {:.1} s",
                 st.threads,
-                st.total_ms / 1e3,
-                st.mean_relative_std_error * 100.0,
-                st.median_pixel_relative_std_error * 100.0,
-                st.p95_pixel_relative_std_error * 100.0
+                st.total_ms / 1e3
             );
             let (direct, stderr) = antiradiance::reference::sibling_paths(&exr);
             r.image.write_exr(&exr)?;
             r.direct.write_exr(&direct)?;
-            r.std_error.write_exr(&stderr)?;
-            eprintln!(
-                "wrote {}, {}, {}",
-                exr.display(),
-                direct.display(),
-                stderr.display()
-            );
+            eprintln!("wrote {} and {}", exr.display(), direct.display());
+            match (&r.std_error, st.mean_relative_std_error) {
+                (Some(e), Some(m)) => {
+                    eprintln!(
+                        "standard error: {:.3}% of the image mean; per lit pixel: median {:.3}%, \
+                         95th percentile {:.3}%",
+                        m * 100.0,
+                        st.median_pixel_relative_std_error.unwrap_or(0.0) * 100.0,
+                        st.p95_pixel_relative_std_error.unwrap_or(0.0) * 100.0
+                    );
+                    e.write_exr(&stderr)?;
+                    eprintln!("wrote {}", stderr.display());
+                }
+                _ => eprintln!(
+                    "standard error unknown at 1 spp; {} not written",
+                    stderr.display()
+                ),
+            }
             if let Some(p) = output {
                 r.image.write_png(&p, exposure)?;
                 eprintln!("wrote {}", p.display());
@@ -322,11 +438,7 @@ fn main() -> Result<()> {
             let mut s = load(scene)?;
             apply_overrides(&mut s, iterations, bins, scheme, precision)?;
             set_size(&mut s, width, height)?;
-            let backend = match backend.as_str() {
-                "gpu" => render::Backend::Gpu,
-                "cpu" => render::Backend::Cpu,
-                x => anyhow::bail!("--backend must be gpu or cpu, got {x}"),
-            };
+            let backend = parse_backend(&backend)?;
             anyhow::ensure!(
                 (16..=8192).contains(&shadow_map_size),
                 "--shadow-map-size must be 16..=8192"

@@ -111,6 +111,35 @@ pub fn compare(test: &Image, reference: &Image) -> Result<Metrics> {
     })
 }
 
+/// A picture of where `test` departs from `reference`: red where it is brighter, blue where it is
+/// darker, full intensity at a relative luminance error of `scale` (e.g. 0.5 = 50%).
+pub fn difference_map(test: &Image, reference: &Image, scale: f32) -> Result<Image> {
+    same_size(test, reference)?;
+    let mean = reference.pixels.iter().map(|&p| luminance(p)).sum::<f32>()
+        / reference.pixels.len().max(1) as f32;
+    let eps = (0.01 * mean).max(f32::MIN_POSITIVE);
+    Ok(Image {
+        width: test.width,
+        height: test.height,
+        pixels: test
+            .pixels
+            .iter()
+            .zip(&reference.pixels)
+            .map(|(a, b)| {
+                let (la, lb) = (luminance(*a), luminance(*b));
+                let r = ((la - lb) / (lb.abs() + eps) / scale).clamp(-1.0, 1.0);
+                if r.is_nan() {
+                    [1.0, 0.0, 1.0]
+                } else if r >= 0.0 {
+                    [r, 0.0, 0.0]
+                } else {
+                    [0.0, 0.0, -r]
+                }
+            })
+            .collect(),
+    })
+}
+
 /// `a − b` per pixel (e.g. an image minus the reference's direct part: its indirect light).
 pub fn subtract(a: &Image, b: &Image) -> Result<Image> {
     same_size(a, b)?;

@@ -142,8 +142,53 @@ fn ms(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
 
+/// A frame drawn after some iterations, handed to the callback of [`render_each_iteration`].
+#[derive(Debug, Clone)]
+pub struct IterationFrame {
+    /// Iterations done (0: only the initialization).
+    pub iteration: usize,
+    /// The frame.
+    pub image: Image,
+    /// Wall time (ms) from the end of linking to the end of this iteration: shadow maps, direct
+    /// light, initialization and the iterations, without the frames drawn for earlier ones.
+    pub solve_ms: f64,
+    /// Wall time (ms) of drawing this frame.
+    pub frame_ms: f64,
+}
+
 /// Renders `scene` from its camera with its `[solver]` settings.
 pub fn render(scene: &Scene, opts: &RenderOptions, progress: &dyn Progress) -> Result<Rendered> {
+    let mut last = None;
+    let (stats, i_total) = run(scene, opts, progress, false, &mut |f| {
+        last = Some(f.image);
+        Ok(())
+    })?;
+    Ok(Rendered {
+        image: last.expect("a frame is drawn after the last iteration"),
+        stats,
+        i_total,
+    })
+}
+
+/// Renders a frame after every iteration (1..=`solver.iterations`, or only after the
+/// initialization when that is 0), handing each to `each`: one solve gives the whole
+/// error-per-iteration curve (`study`). Returns the statistics and the final display table.
+pub fn render_each_iteration(
+    scene: &Scene,
+    opts: &RenderOptions,
+    progress: &dyn Progress,
+    each: &mut dyn FnMut(IterationFrame) -> Result<()>,
+) -> Result<(RenderStats, Table)> {
+    run(scene, opts, progress, true, each)
+}
+
+fn run(
+    scene: &Scene,
+    opts: &RenderOptions,
+    progress: &dyn Progress,
+    every_iteration: bool,
+    each: &mut dyn FnMut(IterationFrame) -> Result<()>,
+) -> Result<(RenderStats, Table)> {
     let t0 = Instant::now();
     progress.begin("linking", 1);
     let sys = System::build(scene)?;
@@ -161,6 +206,7 @@ pub fn render(scene: &Scene, opts: &RenderOptions, progress: &dyn Progress) -> R
         ));
         maps = ShadowMaps::new(scene, size);
     }
+    let iterations = scene.solver.iterations;
     let mut passes = BTreeMap::new();
     let mut stats = RenderStats {
         backend: opts.backend,
@@ -168,7 +214,7 @@ pub fn render(scene: &Scene, opts: &RenderOptions, progress: &dyn Progress) -> R
         elements: sys.leaves.len(),
         links: sys.links.links.len(),
         bins: sys.bins.count,
-        iterations: scene.solver.iterations,
+        iterations,
         width: scene.camera.width,
         height: scene.camera.height,
         passes: BTreeMap::new(),
@@ -177,7 +223,11 @@ pub fn render(scene: &Scene, opts: &RenderOptions, progress: &dyn Progress) -> R
         residuals: Vec::new(),
         fallbacks,
     };
-    let (image, i_total) = match opts.backend {
+    // Solve time excludes the frames and the callback (they are not part of solving).
+    let solve_start = Instant::now();
+    let mut excluded_ms = 0.0;
+    let wants_frame = |k: usize| k == iterations || every_iteration && k > 0;
+    let i_total = match opts.backend {
         Backend::Cpu => {
             let t = Instant::now();
             let caster = RayCaster::new(&sys);
@@ -194,22 +244,40 @@ pub fn render(scene: &Scene, opts: &RenderOptions, progress: &dyn Progress) -> R
                 solver.direct_in = Some(direct_in_table(&sys, &scene.lights, &maps));
             }
             passes.insert("direct".to_string(), ms(t));
-            let t = Instant::now();
-            progress.begin("iterations", scene.solver.iterations as u64);
-            solver.initialize();
-            for _ in 0..scene.solver.iterations {
-                solver.iterate(scene.solver.scheme, scene.solver.antiradiance_steps);
-                progress.advance(1);
+            progress.begin("iterations", iterations as u64);
+            let mut solve = 0.0;
+            let mut frame = 0.0;
+            for k in 0..=iterations {
+                let t = Instant::now();
+                if k == 0 {
+                    solver.initialize();
+                } else {
+                    solver.iterate(scene.solver.scheme, scene.solver.antiradiance_steps);
+                    progress.advance(1);
+                }
+                solve += ms(t);
+                if wants_frame(k) {
+                    let t = Instant::now();
+                    let image =
+                        cpu::render(scene, &sys, &solver.i_total, &maps, &surfaces, &caster);
+                    let frame_ms = ms(t);
+                    frame += frame_ms;
+                    excluded_ms += frame_ms;
+                    let t = Instant::now();
+                    each(IterationFrame {
+                        iteration: k,
+                        image,
+                        solve_ms: ms(solve_start) - excluded_ms,
+                        frame_ms,
+                    })?;
+                    excluded_ms += ms(t);
+                }
             }
             progress.end();
-            passes.insert("solve".to_string(), ms(t));
+            passes.insert("solve".to_string(), solve);
+            passes.insert("frame".to_string(), frame);
             stats.residuals = solver.residuals.clone();
-            let t = Instant::now();
-            progress.begin("frame", 1);
-            let img = cpu::render(scene, &sys, &solver.i_total, &maps, &surfaces, &caster);
-            progress.end();
-            passes.insert("frame".to_string(), ms(t));
-            (img, solver.i_total)
+            solver.i_total
         }
         Backend::Gpu => {
             let ctx = match &opts.context {
@@ -245,31 +313,40 @@ pub fn render(scene: &Scene, opts: &RenderOptions, progress: &dyn Progress) -> R
                 progress.end();
                 solver.set_direct(&direct_in_table(&sys, &scene.lights, &maps))?;
             }
-            progress.begin("iterations", scene.solver.iterations as u64);
+            progress.begin("iterations", iterations as u64);
             solver.initialize()?;
             add(solver.timings());
             let mut before = solver.read_i_ex()?;
-            for _ in 0..scene.solver.iterations {
-                solver.iterate(scene.solver.scheme, scene.solver.antiradiance_steps)?;
-                add(solver.timings());
-                let after = solver.read_i_ex()?;
-                stats.residuals.push(residual(&sys, &before, &after));
-                before = after;
-                progress.advance(1);
+            for k in 0..=iterations {
+                if k > 0 {
+                    solver.iterate(scene.solver.scheme, scene.solver.antiradiance_steps)?;
+                    add(solver.timings());
+                    let after = solver.read_i_ex()?;
+                    stats.residuals.push(residual(&sys, &before, &after));
+                    before = after;
+                    progress.advance(1);
+                }
+                if wants_frame(k) {
+                    let t = Instant::now();
+                    let image = frame.render(&mut solver)?;
+                    add(frame.timings());
+                    let frame_ms = ms(t);
+                    excluded_ms += frame_ms;
+                    let t = Instant::now();
+                    each(IterationFrame {
+                        iteration: k,
+                        image,
+                        solve_ms: ms(solve_start) - excluded_ms,
+                        frame_ms,
+                    })?;
+                    excluded_ms += ms(t);
+                }
             }
             progress.end();
-            progress.begin("frame", 1);
-            let img = frame.render(&mut solver)?;
-            add(frame.timings());
-            progress.end();
-            (img, solver.read_i_total()?)
+            solver.read_i_total()?
         }
     };
     stats.passes = passes;
     stats.total_ms = ms(t0);
-    Ok(Rendered {
-        image,
-        stats,
-        i_total,
-    })
+    Ok((stats, i_total))
 }

@@ -54,12 +54,12 @@ pub struct ReferenceStats {
     /// Threads used.
     pub threads: usize,
     /// Mean over pixels of the standard error of the luminance, relative to the image's mean
-    /// luminance.
-    pub mean_relative_std_error: f64,
+    /// luminance (None at 1 spp).
+    pub mean_relative_std_error: Option<f64>,
     /// Median over lit pixels of each pixel's standard error relative to its own luminance.
-    pub median_pixel_relative_std_error: f64,
+    pub median_pixel_relative_std_error: Option<f64>,
     /// 95th percentile of the same.
-    pub p95_pixel_relative_std_error: f64,
+    pub p95_pixel_relative_std_error: Option<f64>,
 }
 
 /// A path-traced image with its direct part and its standard error.
@@ -69,8 +69,8 @@ pub struct Reference {
     pub image: Image,
     /// The part of `image` carried by paths with at most one reflection.
     pub direct: Image,
-    /// Standard error of each pixel's mean, per channel.
-    pub std_error: Image,
+    /// Standard error of each pixel's mean, per channel (None at 1 spp, where it is unknown).
+    pub std_error: Option<Image>,
     /// Convergence figures.
     pub stats: ReferenceStats,
 }
@@ -126,7 +126,7 @@ pub fn render_reference(
                         let var = if opts.spp > 1 {
                             ((sum2 - m * m * n) / (n * (n - 1.0))).max(DVec3::ZERO)
                         } else {
-                            DVec3::splat(f64::NAN)
+                            DVec3::ZERO
                         };
                         m_row[x] = to_f32(m);
                         d_row[x] = to_f32(dsum / n);
@@ -136,8 +136,9 @@ pub fn render_reference(
                 });
         });
         let mut reported = 0;
+        // Poll often (the wall time is measured, and short runs must not wait for a tick).
         while !work.is_finished() {
-            std::thread::sleep(Duration::from_millis(100));
+            std::thread::sleep(Duration::from_millis(2));
             let d = rows_done.load(Ordering::Relaxed);
             progress.advance(d - reported);
             reported = d;
@@ -173,20 +174,22 @@ pub fn render_reference(
             rel[((rel.len() - 1) as f64 * q).round() as usize]
         }
     };
+    let known = opts.spp > 1;
     let stats = ReferenceStats {
         spp: opts.spp,
         seed: opts.seed,
         max_bounces: opts.max_bounces,
         total_ms: t0.elapsed().as_secs_f64() * 1e3,
         threads: rayon::current_num_threads(),
-        mean_relative_std_error: if mean_lum > 0.0 {
+        mean_relative_std_error: known.then_some(if mean_lum > 0.0 {
             mean_err / mean_lum
         } else {
             0.0
-        },
-        median_pixel_relative_std_error: pct(0.5),
-        p95_pixel_relative_std_error: pct(0.95),
+        }),
+        median_pixel_relative_std_error: known.then(|| pct(0.5)),
+        p95_pixel_relative_std_error: known.then(|| pct(0.95)),
     };
+
     Ok(Reference {
         image,
         direct: Image {
@@ -194,7 +197,7 @@ pub fn render_reference(
             height: view.height,
             pixels: direct,
         },
-        std_error,
+        std_error: known.then_some(std_error),
         stats,
     })
 }

@@ -1,0 +1,398 @@
+//! `study`: error against run time. Renders a scene over a sweep of antiradiance settings
+//! (iterations 1..N for each of: bins, element sizes, the other scheme, the other precision,
+//! each varied alone around the scene's own settings) and the path tracer at increasing sample
+//! counts, measures wall time (linking apart from the per-frame solve) and the error against a
+//! reference, for the full image and for indirect light alone, and writes `study.csv`,
+//! `error-vs-time.png` and `convergence.png`.
+
+pub mod plot;
+
+use crate::error::{Error, Result};
+use crate::frame::Image;
+use crate::metrics::{compare, subtract, Metrics};
+use crate::reference::{render_reference, ReferenceOptions};
+use crate::render::{render_each_iteration, Backend, Progress, RenderOptions};
+use crate::scene::{Precision, Scene, Scheme};
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+/// What to sweep.
+#[derive(Clone)]
+pub struct StudyOptions {
+    /// Directory for `study.csv` and the plots (created if missing).
+    pub out: PathBuf,
+    /// Antiradiance is rendered after every iteration 1..=`iterations`.
+    pub iterations: usize,
+    /// Bin counts (each varied alone).
+    pub bins: Vec<usize>,
+    /// Element sizes (each varied alone; scene units).
+    pub element_sizes: Vec<f64>,
+    /// Also run the scheme the scene does not use.
+    pub both_schemes: bool,
+    /// Also run the precision the scene does not use (GPU backend only).
+    pub both_precisions: bool,
+    /// Path tracer samples per pixel, one run each.
+    pub spp: Vec<u32>,
+    /// Seed of the path tracer runs; keep it different from the reference's, or their samples
+    /// correlate and the error looks smaller than it is.
+    pub seed: u64,
+    /// Backend and device for antiradiance.
+    pub render: RenderOptions,
+}
+
+impl StudyOptions {
+    /// The sweep the `study` command runs by default for `scene`.
+    pub fn defaults(scene: &Scene, out: PathBuf) -> Self {
+        let e = scene.solver.element_size;
+        Self {
+            out,
+            iterations: 16,
+            bins: vec![32, 64, 128, 256, 512],
+            element_sizes: vec![2.0 * e, e, 0.5 * e],
+            both_schemes: true,
+            both_precisions: true,
+            spp: vec![1, 4, 16, 64, 256],
+            seed: 0x5eed_57d1,
+            render: RenderOptions::default(),
+        }
+    }
+}
+
+/// One row of `study.csv`.
+#[derive(Debug, Clone)]
+pub struct Row {
+    /// `antiradiance` or `pathtracer`.
+    pub method: &'static str,
+    /// The parameter varied in this run's family: `base`, `bins`, `element_size`, `scheme`,
+    /// `precision`, or `spp`.
+    pub family: String,
+    /// Label of the run's curve in the plots.
+    pub label: String,
+    /// Bins (antiradiance).
+    pub bins: Option<usize>,
+    /// Element size (antiradiance).
+    pub element_size: Option<f64>,
+    /// Scheme (antiradiance).
+    pub scheme: Option<Scheme>,
+    /// Precision (antiradiance, GPU).
+    pub precision: Option<Precision>,
+    /// Iterations done (antiradiance).
+    pub iterations: Option<usize>,
+    /// Samples per pixel (path tracer).
+    pub spp: Option<u32>,
+    /// Leaf elements (antiradiance).
+    pub elements: Option<usize>,
+    /// Links (antiradiance).
+    pub links: Option<usize>,
+    /// Meshing + linking (ms; 0 for the path tracer, whose BVH build is in `frame_ms`).
+    pub linking_ms: f64,
+    /// Wall time after linking to this image (ms): shadow maps, solve to this iteration, frame.
+    pub frame_ms: f64,
+    /// Residual of the last iteration (antiradiance).
+    pub residual: Option<f64>,
+    /// Errors of the full image.
+    pub full: Metrics,
+    /// Errors of the indirect light alone (None without the reference's direct part).
+    pub indirect: Option<Metrics>,
+    /// Fallbacks the run took.
+    pub fallbacks: Vec<String>,
+}
+
+impl Row {
+    /// One line for a log: method, run, time and errors.
+    pub fn summary(&self) -> String {
+        let step = self
+            .iterations
+            .map(|k| format!("it {k}"))
+            .or(self.spp.map(|n| format!("{n} spp")))
+            .unwrap_or_default();
+        let indirect = self
+            .indirect
+            .map(|m| format!("  indirect relRMSE {:.4}", m.rel_rmse))
+            .unwrap_or_default();
+        format!(
+            "{:<12} {:<36} {:>8} {:>9.0} ms  relRMSE {:.4}  MARE {:.4}  FLIP {:.4}{indirect}",
+            self.method,
+            self.label,
+            step,
+            self.total_ms(),
+            self.full.rel_rmse,
+            self.full.mare,
+            self.full.flip
+        )
+    }
+
+    /// Linking plus frame time (ms): the time to this image from scratch.
+    pub fn total_ms(&self) -> f64 {
+        self.linking_ms + self.frame_ms
+    }
+}
+
+/// The reference a study measures against.
+pub struct Truth {
+    /// Full image.
+    pub image: Image,
+    /// Its part carried by paths with at most one reflection (`ref.direct.exr`).
+    pub direct: Option<Image>,
+}
+
+impl Truth {
+    /// Reads a reference EXR and, when present, its `REF.direct.exr` beside it.
+    pub fn load(path: &std::path::Path) -> Result<Self> {
+        let image = Image::read_exr(path)?;
+        let (direct_path, _) = crate::reference::sibling_paths(path);
+        let direct = if direct_path.is_file() {
+            let d = Image::read_exr(&direct_path)?;
+            if (d.width, d.height) != (image.width, image.height) {
+                return Err(Error::Output {
+                    path: direct_path,
+                    message: "size differs from the reference beside it".into(),
+                });
+            }
+            Some(d)
+        } else {
+            None
+        };
+        Ok(Self { image, direct })
+    }
+}
+
+fn scheme_name(s: Scheme) -> &'static str {
+    match s {
+        Scheme::Symmetric => "symmetric",
+        Scheme::Asymmetric => "asymmetric",
+    }
+}
+
+fn precision_name(p: Precision) -> &'static str {
+    match p {
+        Precision::F16 => "f16",
+        Precision::F32 => "f32",
+    }
+}
+
+struct Config {
+    family: &'static str,
+    label: String,
+    scene: Scene,
+}
+
+fn configs(scene: &Scene, o: &StudyOptions) -> Vec<Config> {
+    let base = &scene.solver;
+    let mut out = vec![Config {
+        family: "base",
+        label: format!(
+            "base ({} bins, elem {}, {}, {})",
+            base.bins,
+            base.element_size,
+            scheme_name(base.scheme),
+            precision_name(base.precision)
+        ),
+        scene: scene.clone(),
+    }];
+    let mut vary = |family: &'static str, label: String, f: &dyn Fn(&mut Scene)| {
+        let mut s = scene.clone();
+        f(&mut s);
+        if s.solver != scene.solver {
+            out.push(Config {
+                family,
+                label,
+                scene: s,
+            });
+        }
+    };
+    for &b in &o.bins {
+        vary("bins", format!("{b} bins"), &|s| s.solver.bins = b);
+    }
+    for &e in &o.element_sizes {
+        vary("element_size", format!("elem {e}"), &|s| {
+            s.solver.element_size = e
+        });
+    }
+    if o.both_schemes {
+        let other = match base.scheme {
+            Scheme::Symmetric => Scheme::Asymmetric,
+            Scheme::Asymmetric => Scheme::Symmetric,
+        };
+        vary("scheme", scheme_name(other).into(), &|s| {
+            s.solver.scheme = other
+        });
+    }
+    if o.both_precisions && o.render.backend == Backend::Gpu {
+        let other = match base.precision {
+            Precision::F16 => Precision::F32,
+            Precision::F32 => Precision::F16,
+        };
+        vary("precision", precision_name(other).into(), &|s| {
+            s.solver.precision = other
+        });
+    }
+    out
+}
+
+fn measure(image: &Image, truth: &Truth) -> Result<(Metrics, Option<Metrics>)> {
+    let full = compare(image, &truth.image)?;
+    let indirect = match &truth.direct {
+        Some(d) => Some(compare(&subtract(image, d)?, &subtract(&truth.image, d)?)?),
+        None => None,
+    };
+    Ok((full, indirect))
+}
+
+/// Runs the sweep on `scene` (its camera resized to the reference) and returns one row per
+/// image; `log` receives one line per row as it is measured.
+pub fn run(
+    scene: &Scene,
+    truth: &Truth,
+    o: &StudyOptions,
+    progress: &dyn Progress,
+    log: &mut dyn FnMut(&Row),
+) -> Result<Vec<Row>> {
+    if o.iterations == 0 {
+        return Err(Error::Invalid(
+            "study: --iterations must be at least 1".into(),
+        ));
+    }
+    let mut scene = scene.clone();
+    scene.camera.width = truth.image.width;
+    scene.camera.height = truth.image.height;
+    scene.solver.iterations = o.iterations;
+    let mut rows = Vec::new();
+    let mut render = o.render.clone();
+    if render.backend == Backend::Gpu && render.context.is_none() {
+        render.context = Some(crate::gpu::Context::headless(
+            &crate::gpu::ContextOptions {
+                validation: render.validation,
+                device_name: render.device.clone(),
+            },
+        )?);
+    }
+    for c in configs(&scene, o) {
+        let mut frames = Vec::new();
+        let (stats, _) = render_each_iteration(&c.scene, &render, progress, &mut |f| {
+            let (full, indirect) = measure(&f.image, truth)?;
+            frames.push((f.iteration, f.solve_ms + f.frame_ms, full, indirect));
+            Ok(())
+        })?;
+        for (k, ms, full, indirect) in frames {
+            let s = &c.scene.solver;
+            let row = Row {
+                method: "antiradiance",
+                family: c.family.into(),
+                label: c.label.clone(),
+                bins: Some(stats.bins),
+                element_size: Some(s.element_size),
+                scheme: Some(s.scheme),
+                precision: (render.backend == Backend::Gpu).then_some(s.precision),
+                iterations: Some(k),
+                spp: None,
+                elements: Some(stats.elements),
+                links: Some(stats.links),
+                linking_ms: stats.linking_ms,
+                frame_ms: ms,
+                residual: k
+                    .checked_sub(1)
+                    .and_then(|i| stats.residuals.get(i).copied()),
+                full,
+                indirect,
+                fallbacks: stats.fallbacks.clone(),
+            };
+            log(&row);
+            rows.push(row);
+        }
+    }
+    for &spp in &o.spp {
+        let r = render_reference(
+            &scene,
+            &ReferenceOptions {
+                spp,
+                max_bounces: None,
+                seed: o.seed,
+            },
+            progress,
+        )?;
+        let (full, indirect) = measure(&r.image, truth)?;
+        let row = Row {
+            method: "pathtracer",
+            family: "spp".into(),
+            label: "path tracer".into(),
+            bins: None,
+            element_size: None,
+            scheme: None,
+            precision: None,
+            iterations: None,
+            spp: Some(spp),
+            elements: None,
+            links: None,
+            linking_ms: 0.0,
+            frame_ms: r.stats.total_ms,
+            residual: None,
+            full,
+            indirect,
+            fallbacks: Vec::new(),
+        };
+        log(&row);
+        rows.push(row);
+    }
+    Ok(rows)
+}
+
+/// The CSV header of [`csv`].
+pub const CSV_HEADER: &str = "method,family,bins,element_size,scheme,precision,iterations,spp,\
+elements,links,linking_ms,frame_ms,total_ms,residual,rel_rmse,mare,flip,indirect_rel_rmse,\
+indirect_mare,indirect_flip,fallbacks";
+
+/// `study.csv`: one row per run, empty fields where a column does not apply.
+pub fn csv(rows: &[Row]) -> String {
+    fn opt<T: std::fmt::Display>(v: Option<T>) -> String {
+        v.map(|v| v.to_string()).unwrap_or_default()
+    }
+    let mut s = String::from(CSV_HEADER);
+    s.push('\n');
+    for r in rows {
+        let ind = |f: fn(&Metrics) -> f64| opt(r.indirect.as_ref().map(f));
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{},{:.6e},{:.6e},{:.6e},{},{},{},\"{}\"",
+            r.method,
+            r.family,
+            opt(r.bins),
+            opt(r.element_size),
+            opt(r.scheme.map(scheme_name)),
+            opt(r.precision.map(precision_name)),
+            opt(r.iterations),
+            opt(r.spp),
+            opt(r.elements),
+            opt(r.links),
+            r.linking_ms,
+            r.frame_ms,
+            r.total_ms(),
+            opt(r.residual.map(|v| format!("{v:.6e}"))),
+            r.full.rel_rmse,
+            r.full.mare,
+            r.full.flip,
+            ind(|m| m.rel_rmse),
+            ind(|m| m.mare),
+            ind(|m| m.flip),
+            r.fallbacks.join("; ").replace('"', "'"),
+        );
+    }
+    s
+}
+
+/// Writes `study.csv`, `error-vs-time.png` and `convergence.png` into `dir`; returns the
+/// equal-time comparison (see [`plot::crossover`]) for the full image.
+pub fn write(rows: &[Row], dir: &std::path::Path) -> Result<plot::Crossover> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::Output {
+        path: dir.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    let p = dir.join("study.csv");
+    std::fs::write(&p, csv(rows)).map_err(|e| Error::Output {
+        path: p.clone(),
+        message: e.to_string(),
+    })?;
+    let cross = plot::error_vs_time(rows, &dir.join("error-vs-time.png"))?;
+    plot::convergence(rows, &dir.join("convergence.png"))?;
+    Ok(cross)
+}

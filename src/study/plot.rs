@@ -1,0 +1,337 @@
+//! The study's figures (plotters, bitmap backend, the bundled DejaVu Sans font):
+//! `error-vs-time.png` (log-log error against time to the image, a curve per antiradiance run
+//! family and the path tracer, the equal-time crossover marked; full image and indirect light)
+//! and `convergence.png` (residual and error per iteration, both schemes).
+
+use super::Row;
+use crate::error::{Error, Result};
+use plotters::prelude::*;
+use std::path::Path;
+use std::sync::Once;
+
+/// DejaVu Sans (Bitstream Vera license, `DejaVuSans.LICENSE.txt` beside this file).
+static FONT: &[u8] = include_bytes!("DejaVuSans.ttf");
+
+fn register_font() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        // Fails only for a malformed font; the bundled one is not.
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
+    });
+}
+
+fn err(path: &Path, e: impl std::fmt::Display) -> Error {
+    Error::Output {
+        path: path.to_path_buf(),
+        message: format!("plotting: {e}"),
+    }
+}
+
+/// Piecewise log-log interpolation of `pts` (sorted by x) at `x`; None outside their range.
+fn interp(pts: &[(f64, f64)], x: f64) -> Option<f64> {
+    pts.windows(2).find_map(|w| {
+        let ((x0, y0), (x1, y1)) = (w[0], w[1]);
+        (x >= x0 && x <= x1 && x1 > x0).then(|| {
+            let t = (x.ln() - x0.ln()) / (x1.ln() - x0.ln());
+            (y0.ln() + t * (y1.ln() - y0.ln())).exp()
+        })
+    })
+}
+
+/// The best error antiradiance reached at or before each time (its Pareto frontier).
+fn frontier(rows: &[&Row], err: impl Fn(&Row) -> Option<f64>) -> Vec<(f64, f64)> {
+    let mut pts: Vec<(f64, f64)> = rows
+        .iter()
+        .filter(|r| r.method == "antiradiance")
+        .filter_map(|r| err(r).map(|e| (r.total_ms(), e)))
+        .filter(|p| p.0 > 0.0 && p.1 > 0.0 && p.1.is_finite())
+        .collect();
+    pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut best = f64::INFINITY;
+    pts.into_iter()
+        .filter(|p| {
+            let keep = p.1 < best;
+            best = best.min(p.1);
+            keep
+        })
+        .collect()
+}
+
+/// How the path tracer and antiradiance compare at equal time.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Crossover {
+    /// Antiradiance is more accurate before this time (ms), the path tracer from then on.
+    At(f64),
+    /// The path tracer is at least as accurate at every time both were measured.
+    PathTracerAhead,
+    /// Antiradiance is more accurate at every time both were measured.
+    AntiradianceAhead,
+    /// Their measured times do not overlap (or a method is missing).
+    NoOverlap,
+}
+
+impl std::fmt::Display for Crossover {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Crossover::At(ms) => write!(f, "equal-time crossover at {:.3} s", ms / 1e3),
+            Crossover::PathTracerAhead => {
+                write!(f, "path tracer more accurate at every shared time")
+            }
+            Crossover::AntiradianceAhead => {
+                write!(f, "antiradiance more accurate at every shared time")
+            }
+            Crossover::NoOverlap => write!(f, "no overlap of measured times"),
+        }
+    }
+}
+
+/// The equal-time comparison: over the times both methods were measured, where the path
+/// tracer's error (log-log interpolation between its runs) drops to the best error antiradiance
+/// reached by then (its Pareto frontier).
+pub fn crossover(rows: &[Row], err: impl Fn(&Row) -> Option<f64> + Copy) -> Crossover {
+    let all: Vec<&Row> = rows.iter().collect();
+    let front = frontier(&all, err);
+    let mut pt: Vec<(f64, f64)> = rows
+        .iter()
+        .filter(|r| r.method == "pathtracer")
+        .filter_map(|r| err(r).map(|e| (r.total_ms(), e)))
+        .filter(|p| p.0 > 0.0 && p.1 > 0.0 && p.1.is_finite())
+        .collect();
+    pt.sort_by(|a, b| a.0.total_cmp(&b.0));
+    if pt.len() < 2 || front.is_empty() {
+        return Crossover::NoOverlap;
+    }
+    let (t0, t1) = (pt[0].0.max(front[0].0), pt[pt.len() - 1].0);
+    if t0 >= t1 {
+        return Crossover::NoOverlap;
+    }
+    let best_at = |t: f64| front.iter().take_while(|p| p.0 <= t).last().map(|p| p.1);
+    // Scan the shared time range finely (log-spaced).
+    let n = 400;
+    let ahead: Vec<(f64, bool)> = (0..=n)
+        .map(|i| t0 * (t1 / t0).powf(i as f64 / n as f64))
+        .filter_map(|t| Some((t, interp(&pt, t)? <= best_at(t)?)))
+        .collect();
+    match (ahead.first(), ahead.iter().find(|a| a.1)) {
+        (None, _) => Crossover::NoOverlap,
+        (_, None) => Crossover::AntiradianceAhead,
+        (Some(first), Some(_)) if first.1 => Crossover::PathTracerAhead,
+        (_, Some(a)) => Crossover::At(a.0),
+    }
+}
+
+fn series_of(rows: &[Row]) -> Vec<(String, Vec<&Row>)> {
+    let mut out: Vec<(String, Vec<&Row>)> = Vec::new();
+    for r in rows {
+        match out.iter_mut().find(|(l, _)| *l == r.label) {
+            Some((_, v)) => v.push(r),
+            None => out.push((r.label.clone(), vec![r])),
+        }
+    }
+    out
+}
+
+fn log_range(vals: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, 0f64);
+    for v in vals.filter(|v| v.is_finite() && *v > 0.0) {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if !lo.is_finite() {
+        return (0.1, 1.0);
+    }
+    (lo / 1.5, hi * 1.5)
+}
+
+type Panel<'a> = (&'a str, &'a dyn Fn(&Row) -> Option<f64>);
+
+/// One color per curve label, the same in every panel and plot.
+fn color_of(rows: &[Row], label: &str) -> RGBAColor {
+    let i = series_of(rows)
+        .iter()
+        .position(|(l, _)| l == label)
+        .unwrap_or(0);
+    if rows
+        .iter()
+        .any(|r| r.label == label && r.method == "pathtracer")
+    {
+        BLACK.to_rgba()
+    } else {
+        Palette99::pick(i).to_rgba()
+    }
+}
+
+/// Draws `error-vs-time.png`; returns the comparison for the full image's relative RMSE.
+pub fn error_vs_time(rows: &[Row], path: &Path) -> Result<Crossover> {
+    register_font();
+    let full = |r: &Row| Some(r.full.rel_rmse);
+    let indirect = |r: &Row| r.indirect.map(|m| m.rel_rmse);
+    let panels: Vec<Panel> = if rows.iter().any(|r| r.indirect.is_some()) {
+        vec![("full image", &full), ("indirect light only", &indirect)]
+    } else {
+        vec![("full image", &full)]
+    };
+    let root = BitMapBackend::new(path, (800 * panels.len() as u32, 640)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| err(path, e))?;
+    let areas = root.split_evenly((1, panels.len()));
+    let series = series_of(rows);
+    let mut full_cross = Crossover::NoOverlap;
+    for (area, (title, f)) in areas.iter().zip(&panels) {
+        let (x0, x1) = log_range(rows.iter().map(|r| r.total_ms() / 1e3));
+        let (y0, y1) = log_range(rows.iter().filter_map(|r| f(r)));
+        let mut chart = ChartBuilder::on(area)
+            .caption(
+                format!("relative RMSE vs time, {title}"),
+                ("sans-serif", 22),
+            )
+            .margin(12)
+            .x_label_area_size(44)
+            .y_label_area_size(64)
+            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
+            .map_err(|e| err(path, e))?;
+        chart
+            .configure_mesh()
+            .x_desc("seconds to the image (linking + solve + frame)")
+            .y_desc("relative RMSE")
+            .draw()
+            .map_err(|e| err(path, e))?;
+        for (label, rs) in series.iter() {
+            let is_pt = rs[0].method == "pathtracer";
+            let color = color_of(rows, label);
+            let style = color.stroke_width(if is_pt { 3 } else { 2 });
+            let mut pts: Vec<(f64, f64)> = rs
+                .iter()
+                .filter_map(|r| f(r).map(|e| (r.total_ms() / 1e3, e)))
+                .filter(|p| p.1 > 0.0 && p.1.is_finite())
+                .collect();
+            pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+            chart
+                .draw_series(LineSeries::new(pts.clone(), style))
+                .map_err(|e| err(path, e))?
+                .label(label.clone())
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], style));
+            chart
+                .draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
+                .map_err(|e| err(path, e))?;
+        }
+        let cross = crossover(rows, *f);
+        if *title == "full image" {
+            full_cross = cross;
+        }
+        if let Crossover::At(t) = cross {
+            let s = t / 1e3;
+            chart
+                .draw_series(LineSeries::new(vec![(s, y0), (s, y1)], RED.stroke_width(1)))
+                .map_err(|e| err(path, e))?;
+        }
+        let note = cross.to_string();
+        chart
+            .draw_series(std::iter::once(Text::new(
+                note,
+                (x0 * 1.1, y0 * 1.15),
+                ("sans-serif", 16).into_font().color(&RED),
+            )))
+            .map_err(|e| err(path, e))?;
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 13))
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(|e| err(path, e))?;
+    }
+    root.present().map_err(|e| err(path, e))?;
+    Ok(full_cross)
+}
+
+/// Draws `convergence.png`: residual per iteration for the scene's settings in both schemes,
+/// and the full image's relative RMSE per iteration for every antiradiance run.
+pub fn convergence(rows: &[Row], path: &Path) -> Result<()> {
+    register_font();
+    let root = BitMapBackend::new(path, (1600, 640)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| err(path, e))?;
+    let areas = root.split_evenly((1, 2));
+    let ar: Vec<Row> = rows
+        .iter()
+        .filter(|r| r.method == "antiradiance")
+        .cloned()
+        .collect();
+    let kmax = ar
+        .iter()
+        .filter_map(|r| r.iterations)
+        .max()
+        .unwrap_or(1)
+        .max(2) as f64;
+    let panels: [(&str, &str, &dyn Fn(&Row) -> Option<f64>, bool); 2] = [
+        (
+            "residual per iteration (scene settings, both schemes)",
+            "relative change of I_ex",
+            &|r: &Row| r.residual,
+            true,
+        ),
+        (
+            "error per iteration",
+            "relative RMSE (full image)",
+            &|r: &Row| Some(r.full.rel_rmse),
+            false,
+        ),
+    ];
+    for (area, (title, ydesc, f, schemes_only)) in areas.iter().zip(panels) {
+        let keep = |r: &&Row| !schemes_only || r.family == "base" || r.family == "scheme";
+        let (y0, y1) = log_range(ar.iter().filter(keep).filter_map(f));
+        let mut chart = ChartBuilder::on(area)
+            .caption(title, ("sans-serif", 22))
+            .margin(12)
+            .x_label_area_size(44)
+            .y_label_area_size(64)
+            .build_cartesian_2d(0.5..kmax + 0.5, (y0..y1).log_scale())
+            .map_err(|e| err(path, e))?;
+        chart
+            .configure_mesh()
+            .x_labels(kmax as usize)
+            .x_label_formatter(&|x| format!("{x:.0}"))
+            .x_desc("iteration")
+            .y_desc(ydesc)
+            .draw()
+            .map_err(|e| err(path, e))?;
+        let kept: Vec<Row> = ar.iter().filter(keep).cloned().collect();
+        for (label, rs) in series_of(&kept) {
+            let color = color_of(rows, &label);
+            let pts: Vec<(f64, f64)> = rs
+                .iter()
+                .filter_map(|r| Some((r.iterations? as f64, f(r)?)))
+                .filter(|p| p.1 > 0.0 && p.1.is_finite())
+                .collect();
+            chart
+                .draw_series(LineSeries::new(pts, color.stroke_width(2)))
+                .map_err(|e| err(path, e))?
+                .label(label)
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
+                });
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 13))
+            .position(SeriesLabelPosition::UpperRight)
+            .draw()
+            .map_err(|e| err(path, e))?;
+    }
+    root.present().map_err(|e| err(path, e))?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn log_log_interpolation() {
+        let pts = [(1.0, 1.0), (100.0, 0.01)];
+        assert!((interp(&pts, 10.0).unwrap() - 0.1).abs() < 1e-12);
+        assert!(interp(&pts, 1000.0).is_none());
+    }
+}

@@ -1,0 +1,135 @@
+//! `study` on a tiny scene: the CSV has one row per run with the expected columns, and both
+//! plots are written as PNG files.
+
+mod common;
+
+use antiradiance::gpu::{Context, ContextOptions};
+use antiradiance::reference::{render_reference, ReferenceOptions};
+use antiradiance::render::{Backend, RenderOptions, Silent};
+use antiradiance::scene::{Material, Scene};
+use antiradiance::study::{self, StudyOptions, Truth, CSV_HEADER};
+use common::*;
+use glam::DVec3;
+
+/// A small room lit by a ceiling lamp, with a block in it (so antiradiance has work to do).
+fn tiny() -> Scene {
+    let mut s = Scene::empty();
+    let wall = s.add_material(Material::diffuse("wall", 0.6));
+    let lamp = s.add_material(Material {
+        ke: DVec3::splat(8.0),
+        ..Material::diffuse("lamp", 0.0)
+    });
+    add_box(&mut s, "room", DVec3::ZERO, DVec3::ONE, wall, true);
+    add_box(
+        &mut s,
+        "block",
+        DVec3::new(0.3, 0.0, 0.3),
+        DVec3::new(0.6, 0.4, 0.6),
+        wall,
+        false,
+    );
+    quad(
+        &mut s,
+        "lamp",
+        [
+            DVec3::new(0.4, 0.99, 0.4),
+            DVec3::new(0.6, 0.99, 0.4),
+            DVec3::new(0.6, 0.99, 0.6),
+            DVec3::new(0.4, 0.99, 0.6),
+        ],
+        lamp,
+    );
+    s.camera.eye = DVec3::new(0.5, 0.5, 0.98);
+    s.camera.target = DVec3::new(0.5, 0.45, 0.0);
+    s.camera.fov_y_deg = 70.0;
+    s.camera.width = 24;
+    s.camera.height = 24;
+    s.solver.bins = 32;
+    s.solver.element_size = 0.5;
+    s
+}
+
+#[test]
+fn tiny_study_writes_csv_and_plots() {
+    let s = tiny();
+    let r = render_reference(
+        &s,
+        &ReferenceOptions {
+            spp: 64,
+            max_bounces: None,
+            seed: 1,
+        },
+        &Silent,
+    )
+    .unwrap();
+    let truth = Truth {
+        image: r.image,
+        direct: Some(r.direct),
+    };
+    let dir = std::env::temp_dir().join(format!("antiradiance-study-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut o = StudyOptions::defaults(&s, dir.clone());
+    o.iterations = 2;
+    o.bins = vec![32, 64];
+    o.element_sizes = vec![0.25];
+    o.spp = vec![1, 4, 16];
+    let ctx = Context::headless(&ContextOptions {
+        validation: true,
+        device_name: None,
+    })
+    .unwrap();
+    assert!(ctx.validation_enabled());
+    o.render = RenderOptions {
+        context: Some(ctx.clone()),
+        backend: Backend::Gpu,
+        shadow_map_size: 64,
+        ..Default::default()
+    };
+    let mut logged = 0;
+    let rows = study::run(&s, &truth, &o, &Silent, &mut |_| logged += 1).unwrap();
+    let msgs = ctx.validation_messages();
+    assert!(msgs.is_empty(), "validation errors:\n{}", msgs.join("\n"));
+    let cross = study::write(&rows, &dir).unwrap();
+    println!("crossover: {cross:?}");
+    // base, 64 bins (32 is the base), elem 0.25, asymmetric, f32: 5 configurations × 2
+    // iterations, plus 3 path tracer runs.
+    assert_eq!(rows.len(), 13);
+    assert_eq!(logged, 13);
+    let csv = std::fs::read_to_string(dir.join("study.csv")).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(lines[0], CSV_HEADER);
+    assert_eq!(lines.len(), 14);
+    let cols = CSV_HEADER.split(',').count();
+    let families: Vec<&str> = lines[1..]
+        .iter()
+        .map(|l| l.split(',').nth(1).unwrap())
+        .collect();
+    for f in ["base", "bins", "element_size", "scheme", "precision", "spp"] {
+        assert!(families.contains(&f), "no {f} rows");
+    }
+    for l in &lines[1..] {
+        assert_eq!(l.split(',').count(), cols, "row {l}");
+    }
+    for r in &rows {
+        assert!(r.frame_ms > 0.0 && r.full.rel_rmse.is_finite() && r.full.flip >= 0.0);
+        assert!(r.indirect.is_some());
+        if r.method == "antiradiance" {
+            assert!(r.linking_ms > 0.0 && r.residual.is_some() && r.links.unwrap() > 0);
+        }
+    }
+    // The path tracer's error falls as samples grow (16× the samples: about 4× less noise).
+    let pt: Vec<f64> = rows
+        .iter()
+        .filter(|r| r.method == "pathtracer")
+        .map(|r| r.full.rel_rmse)
+        .collect();
+    assert!(pt[2] < 0.6 * pt[0], "path tracer error {pt:?}");
+    for png in ["error-vs-time.png", "convergence.png"] {
+        let bytes = std::fs::read(dir.join(png)).unwrap();
+        assert!(
+            bytes.starts_with(b"\x89PNG") && bytes.len() > 10_000,
+            "{png}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
