@@ -149,8 +149,11 @@ pub struct IterationFrame {
     pub iteration: usize,
     /// The frame.
     pub image: Image,
-    /// Wall time (ms) from the end of linking to the end of this iteration: shadow maps, direct
-    /// light, initialization and the iterations, without the frames drawn for earlier ones.
+    /// Wall time (ms) of the one-time setup after linking: device resources and pipelines, shadow
+    /// maps, direct light, and the initialization (emission, environment, direct light reflected).
+    pub setup_ms: f64,
+    /// Wall time (ms) of the iterations up to this one (after the setup), without the frames
+    /// drawn for earlier ones.
     pub solve_ms: f64,
     /// Wall time (ms) of drawing this frame.
     pub frame_ms: f64,
@@ -224,7 +227,9 @@ fn run(
         fallbacks,
     };
     // Solve time excludes the frames and the callback (they are not part of solving).
-    let solve_start = Instant::now();
+    let setup_start = Instant::now();
+    let mut setup_ms = 0.0;
+    let mut solve_start = Instant::now();
     let mut excluded_ms = 0.0;
     let wants_frame = |k: usize| k == iterations || every_iteration && k > 0;
     let i_total = match opts.backend {
@@ -251,6 +256,8 @@ fn run(
                 let t = Instant::now();
                 if k == 0 {
                     solver.initialize();
+                    setup_ms = ms(setup_start);
+                    solve_start = Instant::now();
                 } else {
                     solver.iterate(scene.solver.scheme, scene.solver.antiradiance_steps);
                     progress.advance(1);
@@ -267,6 +274,7 @@ fn run(
                     each(IterationFrame {
                         iteration: k,
                         image,
+                        setup_ms,
                         solve_ms: ms(solve_start) - excluded_ms,
                         frame_ms,
                     })?;
@@ -317,6 +325,8 @@ fn run(
             solver.initialize()?;
             add(solver.timings());
             let mut before = solver.read_i_ex()?;
+            setup_ms = ms(setup_start);
+            solve_start = Instant::now();
             for k in 0..=iterations {
                 if k > 0 {
                     solver.iterate(scene.solver.scheme, scene.solver.antiradiance_steps)?;
@@ -336,6 +346,7 @@ fn run(
                     each(IterationFrame {
                         iteration: k,
                         image,
+                        setup_ms,
                         solve_ms: ms(solve_start) - excluded_ms,
                         frame_ms,
                     })?;

@@ -86,7 +86,11 @@ pub struct Row {
     pub links: Option<usize>,
     /// Meshing + linking (ms; 0 for the path tracer, whose BVH build is in `frame_ms`).
     pub linking_ms: f64,
-    /// Wall time after linking to this image (ms): shadow maps, solve to this iteration, frame.
+    /// One-time setup after linking (ms): device resources, pipelines, shadow maps, direct light,
+    /// initialization (0 for the path tracer).
+    pub setup_ms: f64,
+    /// The per-frame part (ms): the iterations up to this one and drawing the frame; for the path
+    /// tracer its whole run.
     pub frame_ms: f64,
     /// Residual of the last iteration (antiradiance).
     pub residual: Option<f64>,
@@ -122,9 +126,9 @@ impl Row {
         )
     }
 
-    /// Linking plus frame time (ms): the time to this image from scratch.
+    /// Linking, setup and frame time (ms): the time to this image from scratch.
     pub fn total_ms(&self) -> f64 {
-        self.linking_ms + self.frame_ms
+        self.linking_ms + self.setup_ms + self.frame_ms
     }
 }
 
@@ -271,10 +275,16 @@ pub fn run(
         let mut frames = Vec::new();
         let (stats, _) = render_each_iteration(&c.scene, &render, progress, &mut |f| {
             let (full, indirect) = measure(&f.image, truth)?;
-            frames.push((f.iteration, f.solve_ms + f.frame_ms, full, indirect));
+            frames.push((
+                f.iteration,
+                f.setup_ms,
+                f.solve_ms + f.frame_ms,
+                full,
+                indirect,
+            ));
             Ok(())
         })?;
-        for (k, ms, full, indirect) in frames {
+        for (k, setup_ms, ms, full, indirect) in frames {
             let s = &c.scene.solver;
             let row = Row {
                 method: "antiradiance",
@@ -289,6 +299,7 @@ pub fn run(
                 elements: Some(stats.elements),
                 links: Some(stats.links),
                 linking_ms: stats.linking_ms,
+                setup_ms,
                 frame_ms: ms,
                 residual: k
                     .checked_sub(1)
@@ -325,6 +336,7 @@ pub fn run(
             elements: None,
             links: None,
             linking_ms: 0.0,
+            setup_ms: 0.0,
             frame_ms: r.stats.total_ms,
             residual: None,
             full,
@@ -339,7 +351,7 @@ pub fn run(
 
 /// The CSV header of [`csv`].
 pub const CSV_HEADER: &str = "method,family,bins,element_size,scheme,precision,iterations,spp,\
-elements,links,linking_ms,frame_ms,total_ms,residual,rel_rmse,mare,flip,indirect_rel_rmse,\
+elements,links,linking_ms,setup_ms,frame_ms,total_ms,residual,rel_rmse,mare,flip,indirect_rel_rmse,\
 indirect_mare,indirect_flip,fallbacks";
 
 /// `study.csv`: one row per run, empty fields where a column does not apply.
@@ -353,7 +365,7 @@ pub fn csv(rows: &[Row]) -> String {
         let ind = |f: fn(&Metrics) -> f64| opt(r.indirect.as_ref().map(f));
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{},{:.6e},{:.6e},{:.6e},{},{},{},\"{}\"",
+            "{},{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3},{},{:.6e},{:.6e},{:.6e},{},{},{},\"{}\"",
             r.method,
             r.family,
             opt(r.bins),
@@ -365,6 +377,7 @@ pub fn csv(rows: &[Row]) -> String {
             opt(r.elements),
             opt(r.links),
             r.linking_ms,
+            r.setup_ms,
             r.frame_ms,
             r.total_ms(),
             opt(r.residual.map(|v| format!("{v:.6e}"))),

@@ -143,6 +143,15 @@ fn log_range(vals: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo / 1.5, hi * 1.5)
 }
 
+/// Three significant digits, without float noise (log-axis tick labels).
+fn tick(v: &f64) -> String {
+    if *v <= 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let digits = (2 - v.log10().floor() as i32).max(0) as usize;
+    format!("{v:.digits$}")
+}
+
 type Panel<'a> = (&'a str, &'a dyn Fn(&Row) -> Option<f64>);
 
 /// One color per curve label, the same in every panel and plot.
@@ -191,7 +200,9 @@ pub fn error_vs_time(rows: &[Row], path: &Path) -> Result<Crossover> {
             .map_err(|e| err(path, e))?;
         chart
             .configure_mesh()
-            .x_desc("seconds to the image (linking + solve + frame)")
+            .x_label_formatter(&tick)
+            .y_label_formatter(&tick)
+            .x_desc("seconds to the image from scratch (linking + setup + iterations + frame)")
             .y_desc("relative RMSE")
             .draw()
             .map_err(|e| err(path, e))?;
@@ -228,7 +239,7 @@ pub fn error_vs_time(rows: &[Row], path: &Path) -> Result<Crossover> {
         chart
             .draw_series(std::iter::once(Text::new(
                 note,
-                (x0 * 1.1, y0 * 1.15),
+                (x0 * (x1 / x0).powf(0.45), y1 / 1.25),
                 ("sans-serif", 16).into_font().color(&RED),
             )))
             .map_err(|e| err(path, e))?;
@@ -237,7 +248,7 @@ pub fn error_vs_time(rows: &[Row], path: &Path) -> Result<Crossover> {
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK)
             .label_font(("sans-serif", 13))
-            .position(SeriesLabelPosition::UpperRight)
+            .position(SeriesLabelPosition::LowerLeft)
             .draw()
             .map_err(|e| err(path, e))?;
     }
@@ -291,6 +302,7 @@ pub fn convergence(rows: &[Row], path: &Path) -> Result<()> {
             .configure_mesh()
             .x_labels(kmax as usize)
             .x_label_formatter(&|x| format!("{x:.0}"))
+            .y_label_formatter(&tick)
             .x_desc("iteration")
             .y_desc(ydesc)
             .draw()
@@ -327,6 +339,64 @@ pub fn convergence(rows: &[Row], path: &Path) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn tick_labels_have_three_significant_digits() {
+        assert_eq!(tick(&0.30000000000000004), "0.300");
+        assert_eq!(tick(&2.0), "2.00");
+        assert_eq!(tick(&150.0), "150");
+        assert_eq!(tick(&0.001234), "0.00123");
+    }
+
+    fn row(method: &'static str, ms: f64, e: f64) -> Row {
+        let m = crate::metrics::Metrics {
+            rel_rmse: e,
+            mare: e,
+            flip: e,
+        };
+        Row {
+            method,
+            family: "x".into(),
+            label: method.into(),
+            bins: None,
+            element_size: None,
+            scheme: None,
+            precision: None,
+            iterations: None,
+            spp: None,
+            elements: None,
+            links: None,
+            linking_ms: 0.0,
+            setup_ms: 0.0,
+            frame_ms: ms,
+            residual: None,
+            full: m,
+            indirect: None,
+            fallbacks: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn crossover_cases() {
+        let e = |r: &Row| Some(r.full.rel_rmse);
+        // Path tracer error ∝ t^-1/2 from 1 at 10 ms; antiradiance flat at 0.1 from 20 ms.
+        let pt = |k: f64| row("pathtracer", 10.0 * k, 1.0 / k.sqrt());
+        let mut rows = vec![pt(1.0), pt(10.0), pt(100.0), pt(1000.0)];
+        rows.push(row("antiradiance", 20.0, 0.1));
+        match crossover(&rows, e) {
+            Crossover::At(t) => assert!((t / 1000.0 - 1.0).abs() < 0.05, "{t}"),
+            c => panic!("{c:?}"),
+        }
+        rows.pop();
+        rows.push(row("antiradiance", 20.0, 0.001));
+        assert_eq!(crossover(&rows, e), Crossover::AntiradianceAhead);
+        rows.pop();
+        rows.push(row("antiradiance", 20.0, 5.0));
+        assert_eq!(crossover(&rows, e), Crossover::PathTracerAhead);
+        rows.pop();
+        rows.push(row("antiradiance", 1e6, 0.1));
+        assert_eq!(crossover(&rows, e), Crossover::NoOverlap);
+    }
 
     #[test]
     fn log_log_interpolation() {
