@@ -357,38 +357,15 @@ fn main() -> Result<()> {
                 seed,
             };
             let r = antiradiance::reference::render_reference(&s, &opts, &Bars::default())?;
-            let st = &r.stats;
-            eprintln!(
-                "{spp} spp on {} threads in {:.1} s",
-                st.threads,
-                st.total_ms / 1e3
-            );
-            let (direct, stderr) = antiradiance::reference::sibling_paths(&exr);
-            r.image.write_exr(&exr)?;
-            r.direct.write_exr(&direct)?;
-            eprintln!("wrote {} and {}", exr.display(), direct.display());
-            match (&r.std_error, st.mean_relative_std_error) {
-                (Some(e), Some(m)) => {
-                    eprintln!(
-                        "standard error: {:.3}% of the image mean; per lit pixel: median {:.3}%, \
-                         95th percentile {:.3}%",
-                        m * 100.0,
-                        st.median_pixel_relative_std_error.unwrap_or(0.0) * 100.0,
-                        st.p95_pixel_relative_std_error.unwrap_or(0.0) * 100.0
-                    );
-                    e.write_exr(&stderr)?;
-                    eprintln!("wrote {}", stderr.display());
-                }
-                _ => eprintln!(
-                    "standard error unknown at 1 spp; {} not written",
-                    stderr.display()
-                ),
+            eprintln!("{}", r.stats.summary());
+            for p in r.write(&exr)? {
+                eprintln!("wrote {}", p.display());
             }
             if let Some(p) = output {
                 r.image.write_png(&p, exposure)?;
                 eprintln!("wrote {}", p.display());
             }
-            write_json(&json, st)?;
+            write_json(&json, &r.stats)?;
         }
         Command::Profile {
             scene,

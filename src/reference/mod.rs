@@ -202,6 +202,47 @@ pub fn render_reference(
     })
 }
 
+impl Reference {
+    /// Writes `exr`, its `.direct.exr` and (above 1 spp) its `.stderr.exr`; returns the paths.
+    pub fn write(&self, exr: &std::path::Path) -> Result<Vec<std::path::PathBuf>> {
+        let (direct, stderr) = sibling_paths(exr);
+        self.image.write_exr(exr)?;
+        self.direct.write_exr(&direct)?;
+        let mut out = vec![exr.to_path_buf(), direct];
+        if let Some(e) = &self.std_error {
+            e.write_exr(&stderr)?;
+            out.push(stderr);
+        }
+        Ok(out)
+    }
+}
+
+impl ReferenceStats {
+    /// A summary for a log: time, threads and how converged the image is.
+    pub fn summary(&self) -> String {
+        let conv = match (
+            self.mean_relative_std_error,
+            self.median_pixel_relative_std_error,
+            self.p95_pixel_relative_std_error,
+        ) {
+            (Some(m), Some(med), Some(p95)) => format!(
+                "standard error {:.3}% of the image mean; per lit pixel median {:.3}%, 95th \
+                 percentile {:.3}%",
+                m * 100.0,
+                med * 100.0,
+                p95 * 100.0
+            ),
+            _ => "standard error unknown at 1 spp".to_string(),
+        };
+        format!(
+            "{} spp on {} threads in {:.1} s; {conv}",
+            self.spp,
+            self.threads,
+            self.total_ms / 1e3
+        )
+    }
+}
+
 /// The file names written beside a reference `ref.exr`: `ref.direct.exr` (paths with at most one
 /// reflection, for the indirect-only error) and `ref.stderr.exr` (per-pixel standard error).
 pub fn sibling_paths(exr: &std::path::Path) -> (std::path::PathBuf, std::path::PathBuf) {
