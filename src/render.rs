@@ -185,6 +185,31 @@ pub fn render_each_iteration(
     run(scene, opts, progress, true, each)
 }
 
+/// Hands a frame drawn since `drawn` to `each`; the drawing and the callback are kept out of
+/// the solve time (`excluded_ms`).
+fn deliver(
+    each: &mut dyn FnMut(IterationFrame) -> Result<()>,
+    iteration: usize,
+    image: Image,
+    drawn: Instant,
+    setup_ms: f64,
+    solve_start: Instant,
+    excluded_ms: &mut f64,
+) -> Result<()> {
+    let frame_ms = ms(drawn);
+    *excluded_ms += frame_ms;
+    let t = Instant::now();
+    each(IterationFrame {
+        iteration,
+        image,
+        setup_ms,
+        solve_ms: ms(solve_start) - *excluded_ms,
+        frame_ms,
+    })?;
+    *excluded_ms += ms(t);
+    Ok(())
+}
+
 fn run(
     scene: &Scene,
     opts: &RenderOptions,
@@ -267,18 +292,8 @@ fn run(
                     let t = Instant::now();
                     let image =
                         cpu::render(scene, &sys, &solver.i_total, &maps, &surfaces, &caster);
-                    let frame_ms = ms(t);
-                    frame += frame_ms;
-                    excluded_ms += frame_ms;
-                    let t = Instant::now();
-                    each(IterationFrame {
-                        iteration: k,
-                        image,
-                        setup_ms,
-                        solve_ms: ms(solve_start) - excluded_ms,
-                        frame_ms,
-                    })?;
-                    excluded_ms += ms(t);
+                    frame += ms(t);
+                    deliver(each, k, image, t, setup_ms, solve_start, &mut excluded_ms)?;
                 }
             }
             progress.end();
@@ -340,17 +355,7 @@ fn run(
                     let t = Instant::now();
                     let image = frame.render(&mut solver)?;
                     add(frame.timings());
-                    let frame_ms = ms(t);
-                    excluded_ms += frame_ms;
-                    let t = Instant::now();
-                    each(IterationFrame {
-                        iteration: k,
-                        image,
-                        setup_ms,
-                        solve_ms: ms(solve_start) - excluded_ms,
-                        frame_ms,
-                    })?;
-                    excluded_ms += ms(t);
+                    deliver(each, k, image, t, setup_ms, solve_start, &mut excluded_ms)?;
                 }
             }
             progress.end();

@@ -74,17 +74,7 @@ fn plane_under_a_point_light_matches_the_analytic_radiance() {
     let mut s = Scene::empty();
     let m = s.add_material(Material::diffuse("plane", kd));
     let h = 40.0;
-    quad(
-        &mut s,
-        "plane",
-        [
-            DVec3::new(-h, 0.0, h),
-            DVec3::new(h, 0.0, h),
-            DVec3::new(h, 0.0, -h),
-            DVec3::new(-h, 0.0, -h),
-        ],
-        m,
-    );
+    floor(&mut s, h, m);
     let (pos, i) = (DVec3::new(0.4, 1.1, -0.2), 5.0);
     s.lights = vec![Light::Point {
         position: pos,
@@ -146,17 +136,7 @@ fn glossy_plane_under_environment_matches_quadrature() {
         ..Material::diffuse("gloss", kd)
     });
     let h = 50.0;
-    quad(
-        &mut s,
-        "plane",
-        [
-            DVec3::new(-h, 0.0, h),
-            DVec3::new(h, 0.0, h),
-            DVec3::new(h, 0.0, -h),
-            DVec3::new(-h, 0.0, -h),
-        ],
-        m,
-    );
+    floor(&mut s, h, m);
     s.environment = DVec3::splat(env);
     s.camera.eye = DVec3::new(0.0, 2.0, 0.0);
     s.camera.target = DVec3::ZERO;
@@ -224,17 +204,7 @@ fn area_light_on_a_glossy_plane_matches_quadrature() {
         ..Material::diffuse("lamp", 0.0)
     });
     let h = 20.0;
-    quad(
-        &mut s,
-        "plane",
-        [
-            DVec3::new(-h, 0.0, h),
-            DVec3::new(h, 0.0, h),
-            DVec3::new(h, 0.0, -h),
-            DVec3::new(-h, 0.0, -h),
-        ],
-        m,
-    );
+    floor(&mut s, h, m);
     // Facing down (counter-clockwise seen from below), centered above (0.3, ·, 0).
     let (c, half, y) = (DVec3::new(0.3, 1.0, 0.0), 0.25, 1.0);
     quad(

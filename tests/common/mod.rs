@@ -56,3 +56,18 @@ pub fn uniform_enclosure(rho: f64, le: f64, bins: usize, element_size: f64) -> S
     s.solver.element_size = element_size;
     s
 }
+
+/// Adds a square floor of half-size `half` at y = 0, facing up.
+pub fn floor(s: &mut Scene, half: f64, mat: u32) {
+    quad(
+        s,
+        "floor",
+        [
+            DVec3::new(-half, 0.0, half),
+            DVec3::new(half, 0.0, half),
+            DVec3::new(half, 0.0, -half),
+            DVec3::new(-half, 0.0, -half),
+        ],
+        mat,
+    );
+}
