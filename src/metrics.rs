@@ -22,7 +22,8 @@ pub struct Metrics {
     pub flip: f64,
 }
 
-fn luminance(p: [f32; 3]) -> f32 {
+/// Rec. 709 luminance of a linear RGB pixel.
+pub fn luminance(p: [f32; 3]) -> f32 {
     0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]
 }
 

@@ -27,16 +27,24 @@ pub struct Hit {
 
 struct Shape {
     corners: [DVec3; 3],
+    /// Padded box, computed once: closest-hit queries read it for every candidate.
+    bounds: Aabb<f32, 3>,
     node: usize,
 }
 
 impl Bounded<f32, 3> for Shape {
     fn aabb(&self) -> Aabb<f32, 3> {
-        let lo = self.corners[0].min(self.corners[1]).min(self.corners[2]);
-        let hi = self.corners[0].max(self.corners[1]).max(self.corners[2]);
+        self.bounds
+    }
+}
+
+impl Shape {
+    fn new(corners: [DVec3; 3]) -> Self {
+        let lo = corners[0].min(corners[1]).min(corners[2]);
+        let hi = corners[0].max(corners[1]).max(corners[2]);
         // Widen by an f32 ulp-scale margin so the f64 test never loses a hit to AABB rounding.
         let pad = 1e-5 * (1.0 + lo.abs().max(hi.abs()).max_element());
-        Aabb::with_bounds(
+        let bounds = Aabb::with_bounds(
             Point3::new(
                 (lo.x - pad) as f32,
                 (lo.y - pad) as f32,
@@ -47,7 +55,12 @@ impl Bounded<f32, 3> for Shape {
                 (hi.y + pad) as f32,
                 (hi.z + pad) as f32,
             ),
-        )
+        );
+        Self {
+            corners,
+            bounds,
+            node: 0,
+        }
     }
 }
 
@@ -119,10 +132,7 @@ impl RayCaster {
 
     /// Builds the BVH over `triangles`; hits report indices into this list.
     pub fn from_triangles(triangles: Vec<[DVec3; 3]>) -> Self {
-        let mut shapes: Vec<Shape> = triangles
-            .into_iter()
-            .map(|corners| Shape { corners, node: 0 })
-            .collect();
+        let mut shapes: Vec<Shape> = triangles.into_iter().map(Shape::new).collect();
         let bvh = Bvh::build(&mut shapes);
         Self { shapes, bvh }
     }
@@ -150,7 +160,7 @@ impl RayCaster {
         // best hit, none of the rest can be nearer.
         for s in self.bvh.nearest_traverse_iterator(&ray, &self.shapes) {
             let limit = best.map_or(t_max, |b| b.t);
-            if entry(&s.aabb(), o, d) > limit {
+            if entry(&s.bounds, o, d) > limit {
                 break;
             }
             if let Some((t, u, v)) = intersect(&s.corners, o, d, t_min) {

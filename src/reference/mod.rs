@@ -76,7 +76,7 @@ pub struct Reference {
 }
 
 fn luminance(p: [f32; 3]) -> f64 {
-    0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64
+    crate::metrics::luminance(p) as f64
 }
 
 fn to_f32(v: DVec3) -> [f32; 3] {
