@@ -16,6 +16,7 @@ layout(binding = AR_BINDING_IRRADIANCE_D) uniform sampler2D irradiance_d;
 layout(binding = AR_BINDING_ATTR_NORMAL_AREA) uniform sampler2D attr_normal_area;
 layout(binding = AR_BINDING_ATTR_LEAF) uniform sampler2D attr_leaf;
 layout(binding = AR_BINDING_DIRECT) uniform sampler2D direct;
+layout(binding = AR_BINDING_LOBE_NORM) uniform sampler2D lobe_norm;
 layout(std430, binding = AR_BINDING_MATERIALS) readonly buffer Materials { Material materials[]; };
 layout(std430, binding = AR_BINDING_BIN_CENTERS) readonly buffer BinCenters { vec4 centers[]; };
 
@@ -32,10 +33,12 @@ vec3 ar_ld(uint row, uint bin) {
     return (pc.flags & AR_FLAG_DIRECT) != 0u ? texelFetch(direct, ar_texel(row, bin), 0).rgb : vec3(0.0);
 }
 
-vec3 ar_phong(vec3 ks, float ns, vec3 n, vec3 incident, vec3 outgoing) {
+// The lobe as the bins sample it (src/brdf.rs DiscreteLobe): the material record carries the
+// effective exponent, lobe_norm the factor of incident bin l that conserves the true albedo.
+vec3 ar_phong(vec3 ks, float ns, vec3 n, vec3 incident, vec3 outgoing, float factor) {
     vec3 m = incident - 2.0 * dot(incident, n) * n;
     float c = dot(m, outgoing);
-    return c <= 0.0 ? vec3(0.0) : ks * ((ns + 2.0) / (2.0 * AR_PI) * pow(c, ns));
+    return c <= 0.0 ? vec3(0.0) : ks * ((ns + 2.0) / (2.0 * AR_PI) * pow(c, ns) * factor);
 }
 
 void ar_local(bool glossy) {
@@ -67,7 +70,8 @@ void ar_local(bool glossy) {
                     vec3 inc = centers[l].xyz;
                     float cos_l = -dot(inc, n);
                     if (cos_l > 0.0) {
-                        vec3 f = ar_phong(mat.ks_ns.rgb, mat.ks_ns.a, n, inc, dir) * (cos_l * pc.omega * c);
+                        float factor = texelFetch(lobe_norm, ar_texel(row, l), 0).r;
+                        vec3 f = ar_phong(mat.ks_ns.rgb, mat.ks_ns.a, n, inc, dir, factor) * (cos_l * pc.omega * c);
                         r_t += f * ar_lt(row, l);
                         r_d += f * ar_ld(row, l);
                     }

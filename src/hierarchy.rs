@@ -96,20 +96,22 @@ impl Hierarchy {
                 (lo.min(c), hi.max(c))
             },
         );
-        let ext = hi - lo;
-        let axis = if ext.x >= ext.y && ext.x >= ext.z {
+        // Extents and positions are compared on a grid relative to the node's size, so that
+        // the same scene at any scale (rounding differently) builds the same tree.
+        let size = (hi - lo).max_element().max(f64::MIN_POSITIVE);
+        let quantum = size * 1e-9;
+        let q = |v: f64| (v / quantum).round() as i64;
+        let ext = (hi - lo).to_array().map(q);
+        let axis = if ext[0] >= ext[1] && ext[0] >= ext[2] {
             0
-        } else if ext.y >= ext.z {
+        } else if ext[1] >= ext[2] {
             1
         } else {
             2
         };
+        let key = |i: u32| q(els[i as usize].center[axis] - lo[axis]);
         let mid = idx.len() / 2;
-        idx.select_nth_unstable_by(mid, |&a, &b| {
-            els[a as usize].center[axis]
-                .total_cmp(&els[b as usize].center[axis])
-                .then(a.cmp(&b))
-        });
+        idx.select_nth_unstable_by(mid, |&a, &b| key(a).cmp(&key(b)).then(a.cmp(&b)));
         let (left, right) = idx.split_at_mut(mid);
         let l = self.build_rec(els, left, me, depth + 1);
         let r = self.build_rec(els, right, me, depth + 1);

@@ -2,6 +2,7 @@
 //! Everything the CPU solver and the GPU passes share is built here, once.
 
 use crate::bins::Bins;
+use crate::brdf::DiscreteLobe;
 use crate::elements::{build_elements, Element};
 use crate::error::{Error, Result};
 use crate::filter::FilterTables;
@@ -47,6 +48,13 @@ pub struct System {
     pub materials: Vec<Material>,
     /// Time to build elements and hierarchy, ms.
     pub meshing_ms: f64,
+    /// The Phong lobe of each material as sampled in the bins (`None`: not glossy).
+    pub lobes: Vec<Option<DiscreteLobe>>,
+    /// Per-incident-bin lobe factors of the glossy leaves ([`DiscreteLobe::factors`]), `bins`
+    /// values per glossy leaf; see [`System::lobe_factors`].
+    pub lobe_norm: Vec<f32>,
+    /// For every leaf (index into `leaves`), its block in `lobe_norm`, or `u32::MAX`.
+    pub lobe_slot: Vec<u32>,
 }
 
 /// Upper bound on host memory the CPU tables may take.
@@ -80,7 +88,7 @@ impl System {
         let t1 = Instant::now();
         crate::linker::exact_leaf_form_factors(&mut links, &hierarchy, &elements, &bins, &filters);
         links.linking_ms += t1.elapsed().as_secs_f64() * 1e3;
-        let leaves = hierarchy
+        let leaves: Vec<LeafAttributes> = hierarchy
             .leaves
             .iter()
             .map(|&node| {
@@ -99,6 +107,11 @@ impl System {
             leaf_slot[n as usize] = i as u32;
         }
         let materials = scene.materials.clone();
+        let lobes: Vec<Option<DiscreteLobe>> = materials
+            .iter()
+            .map(|m| m.is_glossy().then(|| DiscreteLobe::new(m.ns, &bins)))
+            .collect();
+        let (lobe_norm, lobe_slot) = lobe_factors(&leaves, &lobes, &bins);
         Ok(Self {
             elements,
             hierarchy,
@@ -109,11 +122,48 @@ impl System {
             leaf_slot,
             materials,
             meshing_ms,
+            lobes,
+            lobe_norm,
+            lobe_slot,
         })
+    }
+
+    /// The lobe factors of leaf `li` per incident bin, or `None` for a non-glossy leaf.
+    pub fn lobe_factors(&self, li: usize) -> Option<&[f32]> {
+        let k = *self.lobe_slot.get(li)?;
+        let m = self.bins.count;
+        (k != u32::MAX).then(|| &self.lobe_norm[k as usize * m..(k as usize + 1) * m])
     }
 
     /// Number of table rows (hierarchy nodes).
     pub fn rows(&self) -> usize {
         self.hierarchy.len()
     }
+}
+
+/// Lobe factors of every glossy leaf (in parallel) and each leaf's block index.
+fn lobe_factors(
+    leaves: &[LeafAttributes],
+    lobes: &[Option<DiscreteLobe>],
+    bins: &Bins,
+) -> (Vec<f32>, Vec<u32>) {
+    use rayon::prelude::*;
+    let mut slot = vec![u32::MAX; leaves.len()];
+    let glossy: Vec<usize> = (0..leaves.len())
+        .filter(|&i| lobes[leaves[i].material as usize].is_some())
+        .collect();
+    for (k, &i) in glossy.iter().enumerate() {
+        slot[i] = k as u32;
+    }
+    let norm: Vec<f32> = glossy
+        .par_iter()
+        .flat_map_iter(|&i| {
+            let l = &leaves[i];
+            let lobe = lobes[l.material as usize].expect("glossy leaf");
+            lobe.factors(bins, l.normal, l.cos_norm)
+                .into_iter()
+                .map(|f| f as f32)
+        })
+        .collect();
+    (norm, slot)
 }

@@ -84,12 +84,17 @@ pub struct GpuMaterial {
 }
 
 impl GpuMaterial {
-    /// The shader record of `m`.
+    /// The shader record of `m` (the frame's per-pixel BRDF uses the material's own exponent).
     pub fn new(m: &crate::scene::Material) -> Self {
+        Self::with_exponent(m, m.ns)
+    }
+
+    /// The record with the Phong exponent replaced (the solver's lobe as the bins sample it).
+    pub fn with_exponent(m: &crate::scene::Material, ns: f64) -> Self {
         let v = |v: glam::DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
         Self {
             kd: v(m.kd, 0.0),
-            ks_ns: v(m.ks, m.ns),
+            ks_ns: v(m.ks, ns),
             ke: v(m.ke, 0.0),
         }
     }
@@ -131,8 +136,10 @@ pub mod binding {
     pub const MATERIALS: u32 = 11;
     /// Bin center directions storage buffer (vec4 per bin).
     pub const BIN_CENTERS: u32 = 12;
+    /// Glossy leaves' lobe factor per incident bin (R32, table layout; 1×1 without glossy leaves).
+    pub const LOBE_NORM: u32 = 13;
     /// Number of bindings.
-    pub const COUNT: u32 = 13;
+    pub const COUNT: u32 = 14;
     /// Storage-buffer bindings (the rest are combined image samplers).
     pub const BUFFERS: [u32; 2] = [MATERIALS, BIN_CENTERS];
 }
@@ -387,6 +394,7 @@ mod tests {
             ("LEAF_EX_NEXT", binding::LEAF_EX_NEXT),
             ("MATERIALS", binding::MATERIALS),
             ("BIN_CENTERS", binding::BIN_CENTERS),
+            ("LOBE_NORM", binding::LOBE_NORM),
         ];
         assert_eq!(consts.len() as u32, binding::COUNT);
         for (name, value) in consts {

@@ -35,10 +35,12 @@ pub struct Images {
     pub filter: Image,
     /// Direct incident radiance (1×1 placeholder until set).
     pub direct: Image,
+    /// Lobe factors per glossy leaf and incident bin (1×1 placeholder without glossy leaves).
+    pub lobe_norm: Image,
 }
 
 impl Images {
-    fn all_mut(&mut self) -> [&mut Image; 12] {
+    fn all_mut(&mut self) -> [&mut Image; 13] {
         let [a, b] = &mut self.leaf_ex;
         [
             a,
@@ -53,6 +55,7 @@ impl Images {
             &mut self.attr_leaf,
             &mut self.filter,
             &mut self.direct,
+            &mut self.lobe_norm,
         ]
     }
 }
@@ -214,7 +217,24 @@ impl Resources {
                 vk::Format::R32_SFLOAT,
             )?,
             direct: ctx.create_image("direct light (none)", 1, 1, format)?,
+            lobe_norm: if sys.lobe_norm.is_empty() {
+                ctx.create_image("lobe factors (none)", 1, 1, vk::Format::R32_SFLOAT)?
+            } else {
+                ctx.create_image("lobe factors", tw, th, vk::Format::R32_SFLOAT)?
+            },
         };
+        // Lobe factors in table layout (leaf rows of glossy leaves; zero elsewhere).
+        let mut lobe =
+            vec![0.0f32; (images.lobe_norm.extent.width * images.lobe_norm.extent.height) as usize];
+        for (li, leaf) in sys.leaves.iter().enumerate() {
+            if let Some(f) = sys.lobe_factors(li) {
+                for (j, &v) in f.iter().enumerate() {
+                    let (x, y) = layout.texel(leaf.node, j as u32);
+                    lobe[(y * tw + x) as usize] = v;
+                }
+            }
+        }
+        ctx.upload_image(&mut images.lobe_norm, as_bytes(&lobe))?;
         // Attributes.
         let mut na = vec![[0.0f32; 4]; (rw * rh) as usize];
         let mut lf = vec![[0.0f32; 4]; (rw * rh) as usize];
@@ -241,7 +261,12 @@ impl Resources {
         ctx.upload_image(&mut images.direct, &zero)?;
         let vb = vk::BufferUsageFlags::VERTEX_BUFFER;
         let sb = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let materials: Vec<GpuMaterial> = sys.materials.iter().map(GpuMaterial::new).collect();
+        let materials: Vec<GpuMaterial> = sys
+            .materials
+            .iter()
+            .zip(&sys.lobes)
+            .map(|(m, lobe)| GpuMaterial::with_exponent(m, lobe.map_or(m.ns, |l| l.exponent)))
+            .collect();
         let centers = super::layout::bin_centers(&sys.bins);
         let buffers = Buffers {
             links: ctx.upload_buffer("links", as_bytes(&draw.links), vb)?,
@@ -319,6 +344,7 @@ impl Resources {
                 binding::ATTR_NORMAL_AREA => &im.attr_normal_area,
                 binding::ATTR_LEAF => &im.attr_leaf,
                 binding::DIRECT => &im.direct,
+                binding::LOBE_NORM => &im.lobe_norm,
                 _ => &im.leaf_ex[1 - p],
             }
         };
@@ -378,7 +404,8 @@ impl Resources {
             + im.l_in.bytes()
             + im.l_push.bytes()
             + im.i_total.bytes()
-            + im.direct.bytes();
+            + im.direct.bytes()
+            + im.lobe_norm.bytes();
         let attrs = im.irradiance_t.bytes()
             + im.irradiance_d.bytes()
             + im.attr_normal_area.bytes()

@@ -3,7 +3,7 @@
 //! for solid objects it has passed through the object's own surface, whose antiradiance cancels it.
 
 use super::{CpuSolver, LocalMode};
-use crate::brdf::phong_lobe;
+use crate::brdf::{lobe_shape, mirror};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::f64::consts::PI;
@@ -44,7 +44,16 @@ pub fn local(s: &mut CpuSolver<'_>, mode: LocalMode) {
             let ld = |l: usize| dr.map_or(DVec3::ZERO, |d| d[l]);
             let e_t: DVec3 = incoming.iter().map(|&(l, wt)| lt(l) * wt).sum();
             let e_d: DVec3 = incoming.iter().map(|&(l, wt)| ld(l) * wt).sum();
-            let glossy = mat.is_glossy();
+            // The lobe as the bins sample it (effective exponent, per-bin albedo factors).
+            let lobe = sys.lobes[leaf.material as usize]
+                .zip(sys.lobe_factors(slot as usize))
+                .map(|(lobe, f)| {
+                    let mirrored: Vec<DVec3> = incoming
+                        .iter()
+                        .map(|&(l, _)| mirror(sys.bins.centers[l], n))
+                        .collect();
+                    (lobe.exponent, f, mirrored)
+                });
             for (j, dir) in sys.bins.centers.iter().enumerate() {
                 let cj = dir.dot(n);
                 if cj > 0.0 {
@@ -53,9 +62,10 @@ pub fn local(s: &mut CpuSolver<'_>, mode: LocalMode) {
                     }
                     let base = a * c * cj;
                     let (mut r_t, mut r_d) = (mat.kd / PI * e_t, mat.kd / PI * e_d);
-                    if glossy {
-                        for &(l, wt) in &incoming {
-                            let f = phong_lobe(mat.ks, mat.ns, n, sys.bins.centers[l], *dir) * wt;
+                    if let Some((exponent, factors, mirrored)) = &lobe {
+                        for (&(l, wt), r) in incoming.iter().zip(mirrored) {
+                            let shape = lobe_shape(*exponent, r.dot(*dir));
+                            let f = mat.ks * (shape * factors[l] as f64 * wt);
                             r_t += f * lt(l);
                             r_d += f * ld(l);
                         }
