@@ -66,6 +66,9 @@ pub enum Error {
         /// What went wrong.
         message: String,
     },
+    /// The solve produced values that cannot be trusted and no fallback recovered.
+    #[error("numerical failure: {0}")]
+    Numerical(String),
     /// A run option (command-line argument or API parameter) is out of range or inconsistent.
     #[error("{0}")]
     Invalid(String),

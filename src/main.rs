@@ -51,6 +51,12 @@ enum Command {
         /// Override `solver.precision` (f16 | f32).
         #[arg(long)]
         precision: Option<String>,
+        /// Iterate until the estimated error is below this instead of a fixed count.
+        #[arg(long)]
+        tolerance: Option<f64>,
+        /// Iteration cap with --tolerance (default: `solver.max_iterations`, 1000).
+        #[arg(long)]
+        max_iterations: Option<usize>,
         /// Override `camera.width`.
         #[arg(long)]
         width: Option<u32>,
@@ -405,6 +411,8 @@ fn main() -> Result<()> {
             iterations,
             scheme,
             precision,
+            tolerance,
+            max_iterations,
             width,
             height,
             exposure,
@@ -414,6 +422,14 @@ fn main() -> Result<()> {
         } => {
             let mut s = load(scene)?;
             apply_overrides(&mut s, iterations, bins, scheme, precision)?;
+            if let Some(t) = tolerance {
+                anyhow::ensure!(t > 0.0 && t < 1.0, "--tolerance must be in (0, 1), got {t}");
+                s.solver.tolerance = Some(t);
+            }
+            if let Some(n) = max_iterations {
+                anyhow::ensure!(n >= 1, "--max-iterations must be at least 1");
+                s.solver.max_iterations = n;
+            }
             set_size(&mut s, width, height)?;
             let backend = parse_backend(&backend)?;
             anyhow::ensure!(
@@ -431,8 +447,20 @@ fn main() -> Result<()> {
             for f in &r.stats.fallbacks {
                 eprintln!("fallback: {f}");
             }
-            for (i, res) in r.stats.residuals.iter().enumerate() {
-                eprintln!("iteration {:>3}: residual {res:.3e}", i + 1);
+            for (i, (res, e)) in r.stats.residuals.iter().zip(&r.stats.energies).enumerate() {
+                eprintln!(
+                    "iteration {:>3}: residual {res:.3e}, exitant flux {e:.4e} W",
+                    i + 1
+                );
+            }
+            for w in &r.stats.warnings {
+                eprintln!("warning: {w}");
+            }
+            if let Some(e) = r.stats.estimated_error {
+                eprintln!(
+                    "estimated error {e:.2e} ({} scheme, {} tables)",
+                    r.stats.scheme, r.stats.precision
+                );
             }
             eprintln!(
                 "{} elements, {} links, {} bins on {}; {:.0} ms in all",

@@ -38,8 +38,34 @@ impl Image {
         self.pixels[(y * self.width + x) as usize]
     }
 
-    /// Writes linear float RGB (32-bit channels).
+    /// True when every channel of every pixel is finite.
+    pub fn is_finite(&self) -> bool {
+        self.pixels.iter().all(|p| p.iter().all(|c| c.is_finite()))
+    }
+
+    /// Refuses to write non-finite pixels: a NaN in an output file is never what a user wants.
+    fn check_finite(&self, path: &Path) -> Result<()> {
+        match self
+            .pixels
+            .iter()
+            .position(|p| !p.iter().all(|c| c.is_finite()))
+        {
+            None => Ok(()),
+            Some(i) => Err(io_err(
+                path,
+                format!(
+                    "not written: pixel ({}, {}) is {:?} (non-finite)",
+                    i as u32 % self.width,
+                    i as u32 / self.width,
+                    self.pixels[i]
+                ),
+            )),
+        }
+    }
+
+    /// Writes linear float RGB (32-bit channels); refuses non-finite pixels.
     pub fn write_exr(&self, path: &Path) -> Result<()> {
+        self.check_finite(path)?;
         exr::prelude::write_rgb_file(path, self.width as usize, self.height as usize, |x, y| {
             let p = self.pixels[y * self.width as usize + x];
             (p[0], p[1], p[2])
@@ -68,6 +94,7 @@ impl Image {
 
     /// Writes 8-bit sRGB after multiplying by `2^exposure`.
     pub fn write_png(&self, path: &Path, exposure: f64) -> Result<()> {
+        self.check_finite(path)?;
         let k = 2f32.powf(exposure as f32);
         let bytes: Vec<u8> = self
             .pixels

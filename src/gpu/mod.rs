@@ -11,6 +11,7 @@ pub mod memory;
 pub mod passes;
 pub mod pipelines;
 pub mod profiler;
+pub mod range;
 pub mod resources;
 pub mod shaders;
 pub mod solver;

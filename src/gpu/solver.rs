@@ -8,6 +8,7 @@ use super::memory::Image;
 use super::passes::{self, Pass, Pipelines};
 use super::pipelines::Layouts;
 use super::profiler::Profiler;
+use super::range::Range;
 use super::resources::{decode, encode, Images, MemoryReport, Resources};
 use crate::error::Result;
 use crate::scene::{Precision, Scheme};
@@ -78,29 +79,11 @@ pub struct GpuSolver {
     constants: PassConstants,
     timings: Vec<(String, f64)>,
     fallbacks: Vec<String>,
-    ke_max: f64,
+    sys_range: Range,
+    precision: Precision,
     environment: DVec3,
     direct: Option<Table>,
     scale: f64,
-}
-
-/// Target for the brightest source radiance after scaling: 2^11 leaves 32× headroom below
-/// float16's 65504 for interreflection and accumulation, and keeps intensities down to
-/// ~3e-8 of the brightest source in float16's normal range.
-const SCALED_SOURCE: f64 = 2048.0;
-
-/// Power-of-two scale mapping `brightest` to about [`SCALED_SOURCE`] (exact in binary floats,
-/// so it changes no rounding; the system is linear in its sources).
-pub fn source_scale(brightest: f64) -> f64 {
-    if !brightest.is_finite() || brightest <= 0.0 {
-        return 1.0;
-    }
-    2f64.powi(
-        (SCALED_SOURCE / brightest)
-            .log2()
-            .round()
-            .clamp(-60.0, 60.0) as i32,
-    )
 }
 
 impl GpuSolver {
@@ -153,11 +136,8 @@ impl GpuSolver {
             constants,
             timings: Vec::new(),
             fallbacks,
-            ke_max: sys
-                .materials
-                .iter()
-                .map(|m| m.ke.max_element())
-                .fold(0.0, f64::max),
+            sys_range: Range::of(sys, DVec3::ZERO, 0.0),
+            precision: opts.precision,
             environment: DVec3::ZERO,
             direct: None,
             scale: 1.0,
@@ -202,6 +182,16 @@ impl GpuSolver {
         self.scale
     }
 
+    /// Table precision.
+    pub fn precision(&self) -> Precision {
+        self.precision
+    }
+
+    /// The largest |I_ex| (unscaled, as read back) before float16 overflow is near.
+    pub fn overflow_limit(&self) -> f64 {
+        Range::overflow_limit(self.precision, self.scale)
+    }
+
     /// Uploads the direct-light table at the current source scale (no-op without one).
     fn upload_direct(&mut self) -> Result<()> {
         let Some(table) = &self.direct else {
@@ -230,11 +220,19 @@ impl GpuSolver {
         let direct_max = self.direct.as_ref().map_or(0.0, |t| {
             t.data.iter().map(|v| v.max_element()).fold(0.0, f64::max)
         });
-        let s = source_scale(
-            self.ke_max
+        let range = Range {
+            brightest: self
+                .sys_range
+                .brightest
                 .max(self.environment.max_element())
                 .max(direct_max),
-        );
+            dimmest: match (self.sys_range.dimmest, self.environment.max_element()) {
+                (d, e) if e > 0.0 => Some(d.map_or(e, |d| d.min(e))),
+                (d, _) => d,
+            },
+            ..self.sys_range
+        };
+        let s = range.scale();
         let e = self.environment * s;
         self.constants.environment = [e.x as f32, e.y as f32, e.z as f32, s as f32];
         if s != self.scale {

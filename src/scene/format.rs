@@ -173,4 +173,8 @@ pub struct SolverDesc {
     pub precision: Option<String>,
     /// Upper bound on leaf elements (refuses scenes that would exceed it).
     pub max_elements: Option<i64>,
+    /// Residual target (iterate until the estimated error is below it).
+    pub tolerance: Option<f64>,
+    /// Iteration cap when a tolerance is given.
+    pub max_iterations: Option<i64>,
 }

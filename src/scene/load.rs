@@ -156,6 +156,22 @@ fn solver_settings(s: &format::SolverDesc, path: &Path) -> Result<SolverSettings
         )?,
         precision,
         max_elements: positive_int(s.max_elements, d.max_elements, "solver.max_elements", path)?,
+        tolerance: match s.tolerance {
+            None => None,
+            Some(t) if t.is_finite() && t > 0.0 && t < 1.0 => Some(t),
+            Some(t) => {
+                return Err(scene_err(
+                    path,
+                    format!("`solver.tolerance` must be in (0, 1), got {t}"),
+                ))
+            }
+        },
+        max_iterations: positive_int(
+            s.max_iterations,
+            d.max_iterations,
+            "solver.max_iterations",
+            path,
+        )?,
     })
 }
 

@@ -159,6 +159,11 @@ pub struct SolverSettings {
     pub precision: Precision,
     /// Refuse scenes with more leaf elements than this.
     pub max_elements: usize,
+    /// Residual target: iterate until the estimated error falls below it (then `iterations` is
+    /// ignored and `max_iterations` caps the count). `None`: exactly `iterations`.
+    pub tolerance: Option<f64>,
+    /// Iteration cap when `tolerance` is given.
+    pub max_iterations: usize,
 }
 
 impl Default for SolverSettings {
@@ -172,6 +177,8 @@ impl Default for SolverSettings {
             antiradiance_steps: 4,
             precision: Precision::F16,
             max_elements: 2_000_000,
+            tolerance: None,
+            max_iterations: 1000,
         }
     }
 }

@@ -6,6 +6,7 @@
 //! intensities summed into every ancestor). `I_ex` holds `I_L` in each leaf's front bins and
 //! `-I_A` in its back bins (Fig. 6a), so one table carries radiance and antiradiance.
 
+pub mod convergence;
 pub mod global;
 pub mod local;
 pub mod pull;
@@ -189,23 +190,7 @@ impl<'a> CpuSolver<'a> {
 
     /// Flux leaving all leaves through their front bins (mean of RGB).
     pub fn exitant_flux(&self) -> f64 {
-        let w = self.sys.bins.omega;
-        self.sys
-            .leaves
-            .iter()
-            .map(|l| {
-                let row = self.i_ex.row(l.node as usize);
-                self.sys
-                    .bins
-                    .centers
-                    .iter()
-                    .zip(row)
-                    .filter(|(c, _)| c.dot(l.normal) > 0.0)
-                    .map(|(_, v)| v.element_sum() / 3.0)
-                    .sum::<f64>()
-                    * w
-            })
-            .sum()
+        convergence::exitant_flux(self.sys, &self.i_ex)
     }
 
     /// Irradiance arriving at the front of leaf `li` (index into `sys.leaves`) from links,

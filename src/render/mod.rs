@@ -2,8 +2,10 @@
 //! leaves' direct light, the iterations (GPU passes or the f64 CPU solver), then the frame.
 //! Progress is reported through [`Progress`] so the CLI can draw bars on stderr.
 
-use crate::error::Result;
-use crate::frame::cpu;
+mod backends;
+mod drive;
+
+use crate::error::{Error, Result};
 use crate::frame::lights::direct_in_table;
 use crate::frame::shadow::ShadowMaps;
 use crate::frame::surfaces::Surfaces;
@@ -13,6 +15,7 @@ use crate::scene::Scene;
 use crate::solver::Table;
 use crate::system::System;
 use crate::CpuSolver;
+use drive::Iterative;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -86,8 +89,12 @@ pub struct RenderStats {
     pub links: usize,
     /// Bins.
     pub bins: usize,
-    /// Iterations of the scheme.
+    /// Iterations run (of the run that produced the image, after any restart).
     pub iterations: usize,
+    /// Scheme of the result (`symmetric` or `asymmetric`; differs from the scene's after a fallback).
+    pub scheme: String,
+    /// Table precision of the result (`f16`, `f32`; `f64` for the CPU backend).
+    pub precision: String,
     /// Image size.
     pub width: u32,
     /// Image height.
@@ -100,8 +107,14 @@ pub struct RenderStats {
     pub total_ms: f64,
     /// Relative change of the leaves' I_ex at each iteration.
     pub residuals: Vec<f64>,
+    /// Flux (W, mean of RGB) leaving the leaves' front bins after each iteration.
+    pub energies: Vec<f64>,
+    /// Estimated relative distance to the fixed point after the last iteration.
+    pub estimated_error: Option<f64>,
     /// Departures from the requested configuration.
     pub fallbacks: Vec<String>,
+    /// Things the user should know about the result (e.g. the iteration cap was reached).
+    pub warnings: Vec<String>,
 }
 
 /// A rendered frame.
@@ -113,26 +126,6 @@ pub struct Rendered {
     pub stats: RenderStats,
     /// Display intensities the frame was drawn from (for checks).
     pub i_total: Table,
-}
-
-/// Relative change between two I_ex tables over the leaves' rows (the solvers' residual).
-pub fn residual(sys: &System, before: &Table, after: &Table) -> f64 {
-    let (mut diff, mut norm) = (0.0, 0.0);
-    for l in &sys.leaves {
-        for (a, b) in after
-            .row(l.node as usize)
-            .iter()
-            .zip(before.row(l.node as usize))
-        {
-            diff += (*a - *b).length_squared();
-            norm += a.length_squared();
-        }
-    }
-    if norm > 0.0 {
-        (diff / norm).sqrt()
-    } else {
-        diff.sqrt()
-    }
 }
 
 /// Rows of the stacked shadow-map image (maxImageDimension2D of lavapipe and most GPUs).
@@ -234,7 +227,6 @@ fn run(
         ));
         maps = ShadowMaps::new(scene, size);
     }
-    let iterations = scene.solver.iterations;
     let mut passes = BTreeMap::new();
     let mut stats = RenderStats {
         backend: opts.backend,
@@ -242,22 +234,43 @@ fn run(
         elements: sys.leaves.len(),
         links: sys.links.links.len(),
         bins: sys.bins.count,
-        iterations,
+        iterations: 0,
+        scheme: String::new(),
+        precision: String::new(),
         width: scene.camera.width,
         height: scene.camera.height,
         passes: BTreeMap::new(),
         linking_ms: sys.meshing_ms + sys.links.linking_ms,
         total_ms: 0.0,
         residuals: Vec::new(),
+        energies: Vec::new(),
+        estimated_error: None,
         fallbacks,
+        warnings: Vec::new(),
     };
     // Solve time excludes the frames and the callback (they are not part of solving).
     let setup_start = Instant::now();
-    let mut setup_ms = 0.0;
+    let mut setup_ms = None;
     let mut solve_start = Instant::now();
     let mut excluded_ms = 0.0;
-    let wants_frame = |k: usize| k == iterations || every_iteration && k > 0;
-    let i_total = match opts.backend {
+    let mut last: Option<Image> = None;
+    // Called by the loop for every wanted frame: draw, time, hand on.
+    let mut on_frame = |k: usize, solver: &mut dyn Iterative| -> Result<()> {
+        let setup = *setup_ms.get_or_insert_with(|| {
+            solve_start = Instant::now();
+            ms(setup_start)
+        });
+        let t = Instant::now();
+        let image = solver.draw()?;
+        if !image.is_finite() {
+            return Err(Error::Numerical(format!(
+                "the frame after iteration {k} has non-finite pixels"
+            )));
+        }
+        last = Some(image.clone());
+        deliver(each, k, image, t, setup, solve_start, &mut excluded_ms)
+    };
+    let (outcome, i_total, precision) = match opts.backend {
         Backend::Cpu => {
             let t = Instant::now();
             let caster = RayCaster::new(&sys);
@@ -274,33 +287,25 @@ fn run(
                 solver.direct_in = Some(direct_in_table(&sys, &scene.lights, &maps));
             }
             passes.insert("direct".to_string(), ms(t));
-            progress.begin("iterations", iterations as u64);
-            let mut solve = 0.0;
-            let mut frame = 0.0;
-            for k in 0..=iterations {
-                let t = Instant::now();
-                if k == 0 {
-                    solver.initialize();
-                    setup_ms = ms(setup_start);
-                    solve_start = Instant::now();
-                } else {
-                    solver.iterate(scene.solver.scheme, scene.solver.antiradiance_steps);
-                    progress.advance(1);
-                }
-                solve += ms(t);
-                if wants_frame(k) {
-                    let t = Instant::now();
-                    let image =
-                        cpu::render(scene, &sys, &solver.i_total, &maps, &surfaces, &caster);
-                    frame += ms(t);
-                    deliver(each, k, image, t, setup_ms, solve_start, &mut excluded_ms)?;
-                }
-            }
-            progress.end();
-            passes.insert("solve".to_string(), solve);
-            passes.insert("frame".to_string(), frame);
-            stats.residuals = solver.residuals.clone();
-            solver.i_total
+            let mut cpu = backends::Cpu {
+                solver,
+                scene,
+                maps: &maps,
+                surfaces: &surfaces,
+                caster: &caster,
+                solve_ms: 0.0,
+                frame_ms: 0.0,
+            };
+            let outcome = drive::drive(
+                &sys,
+                &scene.solver,
+                &mut cpu,
+                every_iteration,
+                progress,
+                &mut on_frame,
+            )?;
+            cpu.timings(&mut passes);
+            (outcome, cpu.solver.i_total.clone(), "f64".to_string())
         }
         Backend::Gpu => {
             let ctx = match &opts.context {
@@ -311,11 +316,14 @@ fn run(
                 })?,
             };
             stats.device = ctx.info.name.clone();
+            let (precision, why) = crate::gpu::range::Range::of(&sys, scene.environment, 0.0)
+                .precision(scene.solver.precision);
+            stats.fallbacks.extend(why);
             let mut solver = crate::gpu::GpuSolver::new(
                 ctx.clone(),
                 &sys,
                 crate::gpu::GpuOptions {
-                    precision: scene.solver.precision,
+                    precision,
                     ..Default::default()
                 },
             )?;
@@ -323,46 +331,59 @@ fn run(
             solver.set_environment(scene.environment)?;
             let mut frame =
                 crate::gpu::frame::GpuFrame::new(ctx.clone(), scene, &sys, &surfaces, &maps)?;
-            let mut add = |timings: &[(String, f64)]| {
-                for (k, v) in timings {
-                    *passes.entry(k.clone()).or_insert(0.0) += v;
-                }
-            };
+            let mut direct = None;
             if !maps.views.is_empty() {
                 progress.begin("shadow maps", 1);
                 frame.render_shadow_maps()?;
-                add(frame.timings());
+                for (k, v) in frame.timings() {
+                    *passes.entry(k.clone()).or_insert(0.0) += v;
+                }
                 maps.data = frame.read_shadow_maps()?;
                 progress.end();
-                solver.set_direct(&direct_in_table(&sys, &scene.lights, &maps))?;
+                let d = direct_in_table(&sys, &scene.lights, &maps);
+                solver.set_direct(&d)?;
+                direct = Some(d);
             }
-            progress.begin("iterations", iterations as u64);
-            solver.initialize()?;
-            add(solver.timings());
-            let mut before = solver.read_i_ex()?;
-            setup_ms = ms(setup_start);
-            solve_start = Instant::now();
-            for k in 0..=iterations {
-                if k > 0 {
-                    solver.iterate(scene.solver.scheme, scene.solver.antiradiance_steps)?;
-                    add(solver.timings());
-                    let after = solver.read_i_ex()?;
-                    stats.residuals.push(residual(&sys, &before, &after));
-                    before = after;
-                    progress.advance(1);
-                }
-                if wants_frame(k) {
-                    let t = Instant::now();
-                    let image = frame.render(&mut solver)?;
-                    add(frame.timings());
-                    deliver(each, k, image, t, setup_ms, solve_start, &mut excluded_ms)?;
-                }
-            }
-            progress.end();
-            solver.read_i_total()?
+            let mut gpu = backends::Gpu {
+                solver,
+                frame,
+                sys: &sys,
+                scene,
+                direct,
+                pending: Vec::new(),
+            };
+            let outcome = drive::drive(
+                &sys,
+                &scene.solver,
+                &mut gpu,
+                every_iteration,
+                progress,
+                &mut on_frame,
+            )?;
+            gpu.timings(&mut passes);
+            let p = match gpu.solver.precision() {
+                crate::scene::Precision::F16 => "f16",
+                crate::scene::Precision::F32 => "f32",
+            };
+            (outcome, gpu.solver.read_i_total()?, p.to_string())
         }
     };
+    drop(on_frame);
+    stats.iterations = outcome.residuals.len();
+    stats.scheme = match outcome.scheme {
+        Some(crate::scene::Scheme::Asymmetric) => "asymmetric".into(),
+        _ => "symmetric".into(),
+    };
+    stats.precision = precision;
+    stats.residuals = outcome.residuals;
+    stats.energies = outcome.energies;
+    stats.estimated_error = outcome.estimated_error;
+    stats.fallbacks.extend(outcome.fallbacks);
+    stats.warnings.extend(outcome.warnings);
     stats.passes = passes;
     stats.total_ms = ms(t0);
+    if last.is_none() {
+        return Err(Error::Numerical("no frame was drawn".into()));
+    }
     Ok((stats, i_total))
 }
