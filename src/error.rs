@@ -38,7 +38,7 @@ pub enum Error {
         message: String,
     },
     /// The requested discretization would need more memory than allowed.
-    #[error("{what} needs {needed_bytes} bytes, more than the limit of {limit_bytes} bytes")]
+    #[error("{what} need {needed_bytes} bytes, more than the {limit_bytes} bytes available; use fewer bins or a larger element size")]
     TooLarge {
         /// Which resource.
         what: String,

@@ -220,6 +220,13 @@ fn default_scene() -> PathBuf {
     }
 }
 
+/// The scene's file, to name it in errors that arise after loading (discretization, device).
+fn scene_name(s: &Scene) -> String {
+    s.path
+        .as_ref()
+        .map_or("<scene>".into(), |p| p.display().to_string())
+}
+
 fn load(path: Option<PathBuf>) -> Result<Scene> {
     let path = path.unwrap_or_else(default_scene);
     let s = scene::load_scene(&path)?;
@@ -288,8 +295,19 @@ fn parse_backend(b: &str) -> Result<render::Backend> {
     })
 }
 
-fn main() -> Result<()> {
-    match Cli::parse().command {
+/// Errors are one line (`Error: ...`, causes joined with `: `), whatever RUST_BACKTRACE says.
+fn main() -> std::process::ExitCode {
+    match run(Cli::parse()) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("Error: {}", format!("{e:#}").replace('\n', " "));
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
         Command::Compare {
             test,
             reference,
@@ -388,13 +406,14 @@ fn main() -> Result<()> {
                 validation: false,
                 device_name: device,
             })?;
-            let report = antiradiance::profile::profile(ctx, &s, frames, warmup)?;
+            let report = antiradiance::profile::profile(ctx, &s, frames, warmup)
+                .with_context(|| scene_name(&s))?;
             print!("{}", report.text());
             write_json(&json, &report)?;
         }
         Command::Info { scene, json } => {
             let s = load(scene)?;
-            let sys = System::build(&s)?;
+            let sys = System::build(&s).with_context(|| scene_name(&s))?;
             let info = Info::new(&s, &sys);
             if json {
                 println!("{}", serde_json::to_string_pretty(&info)?);
@@ -443,7 +462,7 @@ fn main() -> Result<()> {
                 device,
                 validation: false,
             };
-            let r = render::render(&s, &opts, &Bars::default())?;
+            let r = render::render(&s, &opts, &Bars::default()).with_context(|| scene_name(&s))?;
             for f in &r.stats.fallbacks {
                 eprintln!("fallback: {f}");
             }

@@ -87,7 +87,7 @@ pub fn profile(
     frames: usize,
     warmup: usize,
 ) -> Result<ProfileReport> {
-    let sys = System::build(scene)?;
+    let sys = System::build_within(scene, Some(ctx.info.device_local_bytes))?;
     let st = &scene.solver;
     let mut gpu = GpuSolver::new(
         ctx.clone(),

@@ -60,9 +60,26 @@ pub struct System {
 /// Upper bound on host memory the CPU tables may take.
 pub const CPU_TABLE_LIMIT_BYTES: u64 = 12 << 30;
 
+/// Bytes of GPU table memory per (row, bin) at `precision`: the I_ex pair and I_total in the
+/// table format, cluster I_ex in float32, L_in and L_push in float32 (the worst case, when the
+/// device truncates float16 blending), and the lobe factors.
+pub fn gpu_bytes_per_texel(precision: crate::scene::Precision) -> u64 {
+    let texel = match precision {
+        crate::scene::Precision::F16 => 8,
+        crate::scene::Precision::F32 => 16,
+    };
+    3 * texel + 16 + 2 * 16 + 4
+}
+
 impl System {
     /// Discretizes a scene with its `[solver]` settings.
     pub fn build(scene: &Scene) -> Result<Self> {
+        Self::build_within(scene, None)
+    }
+
+    /// As [`System::build`], refusing before linking (and before anything is allocated on a
+    /// device) when the GPU tables alone would exceed `device_bytes`.
+    pub fn build_within(scene: &Scene, device_bytes: Option<u64>) -> Result<Self> {
         let t0 = Instant::now();
         let bins = Bins::new(scene.solver.bins)?;
         let elements = build_elements(scene)?;
@@ -73,6 +90,20 @@ impl System {
             });
         }
         let rows = 2 * elements.len() as u64 - 1;
+        if let Some(limit) = device_bytes {
+            let needed = rows * bins.count as u64 * gpu_bytes_per_texel(scene.solver.precision);
+            if needed > limit {
+                return Err(Error::TooLarge {
+                    what: format!(
+                        "GPU tables for {} elements ({rows} nodes) × {} bins (solver.element_size, solver.bins)",
+                        elements.len(),
+                        bins.count
+                    ),
+                    needed_bytes: needed,
+                    limit_bytes: limit,
+                });
+            }
+        }
         let needed = rows * bins.count as u64 * 24 * 5;
         if needed > CPU_TABLE_LIMIT_BYTES {
             return Err(Error::TooLarge {

@@ -106,3 +106,66 @@ fn bad_settings_name_the_field() {
     let p = write(&d, "e.toml", "[solver]\nbins = 64\n");
     expect_error(&p, &["e.toml", "object"]);
 }
+
+/// The corpus in `tests/bad-input/`: every scene fails through the command-line tool with a
+/// non-zero status and a one-line error naming the file and the field (`# expect:` on its first
+/// line), never a panic. `# command: render` runs a GPU render instead of `info` (the device
+/// memory estimate refuses before anything is allocated).
+#[test]
+fn corpus_gives_one_line_errors_naming_file_and_field() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bad-input");
+    let mut scenes: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    scenes.sort();
+    assert!(scenes.len() >= 30, "only {} bad scenes", scenes.len());
+    let out_png = std::env::temp_dir().join(format!("bad-input-{}.png", std::process::id()));
+    for scene in &scenes {
+        let text = std::fs::read_to_string(scene).unwrap();
+        let header = |key: &str| {
+            text.lines()
+                .find_map(|l| l.strip_prefix(&format!("# {key}: ")))
+                .map(str::to_string)
+        };
+        let expect = header("expect").expect("`# expect:` line");
+        let command = header("command").unwrap_or_else(|| "info".into());
+        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_antiradiance"));
+        cmd.arg(&command).arg(scene);
+        if command == "render" {
+            cmd.args(["--width", "8", "--height", "8", "-o"])
+                .arg(&out_png);
+        }
+        let out = cmd.output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let name = scene.file_name().unwrap().to_string_lossy();
+        assert!(!out.status.success(), "{name}: accepted");
+        assert!(!stderr.contains("panicked"), "{name}: panicked: {stderr}");
+        let errors: Vec<&str> = stderr.lines().filter(|l| l.starts_with("Error")).collect();
+        assert_eq!(errors.len(), 1, "{name}: not one error line: {stderr}");
+        let line = errors[0];
+        let lines: Vec<&str> = stderr
+            .lines()
+            .filter(|l| !l.trim().is_empty() && !l.starts_with("warning"))
+            .collect();
+        assert_eq!(lines.len(), 1, "{name}: more than one line: {stderr}");
+        let file_named = expect_file(&text).map_or(name.to_string(), |m| m);
+        assert!(
+            line.contains(&file_named) || line.contains(&*name),
+            "{name}: error does not name the file: {line}"
+        );
+        assert!(
+            line.contains(&expect),
+            "{name}: error does not mention `{expect}`: {line}"
+        );
+        println!("{name}: {line}");
+    }
+}
+
+/// The mesh a scene names, when the error is about that file.
+fn expect_file(text: &str) -> Option<String> {
+    text.lines()
+        .find_map(|l| l.strip_prefix("mesh = \""))
+        .map(|m| m.trim_end_matches('"').to_string())
+}

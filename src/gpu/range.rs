@@ -76,7 +76,9 @@ impl Range {
         Self {
             brightest: ke.iter().cloned().fold(direct_max, f64::max),
             dimmest: ke.iter().cloned().reduce(f64::min),
-            amplification: hi.max(1.0) * gain,
+            // Beyond F16_MAX_GAIN the tables are float32 anyway; more headroom would only push
+            // dim values toward float16's subnormals when float16 is forced.
+            amplification: hi.max(1.0) * gain.min(F16_MAX_GAIN),
             smallest_intensity: lo.min(1.0),
             gain,
         }

@@ -211,8 +211,19 @@ fn run(
     each: &mut dyn FnMut(IterationFrame) -> Result<()>,
 ) -> Result<(RenderStats, Table)> {
     let t0 = Instant::now();
+    // The device comes first: its memory bounds the discretization before linking.
+    let ctx = match (opts.backend, &opts.context) {
+        (Backend::Cpu, _) => None,
+        (Backend::Gpu, Some(c)) => Some(c.clone()),
+        (Backend::Gpu, None) => Some(crate::gpu::Context::headless(
+            &crate::gpu::ContextOptions {
+                validation: opts.validation,
+                device_name: opts.device.clone(),
+            },
+        )?),
+    };
     progress.begin("linking", 1);
-    let sys = System::build(scene)?;
+    let sys = System::build_within(scene, ctx.as_ref().map(|c| c.info.device_local_bytes))?;
     progress.end();
     let surfaces = Surfaces::new(scene, &sys);
     let mut maps = ShadowMaps::new(scene, opts.shadow_map_size);
@@ -308,13 +319,7 @@ fn run(
             (outcome, cpu.solver.i_total.clone(), "f64".to_string())
         }
         Backend::Gpu => {
-            let ctx = match &opts.context {
-                Some(c) => c.clone(),
-                None => crate::gpu::Context::headless(&crate::gpu::ContextOptions {
-                    validation: opts.validation,
-                    device_name: opts.device.clone(),
-                })?,
-            };
+            let ctx = ctx.clone().expect("created above for the GPU backend");
             stats.device = ctx.info.name.clone();
             let (precision, why) = crate::gpu::range::Range::of(&sys, scene.environment, 0.0)
                 .precision(scene.solver.precision);

@@ -24,8 +24,17 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene> {
             .map(|s| {
                 let before = &text[..s.start.min(text.len())];
                 let line = before.matches('\n').count() + 1;
-                let col = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
-                format!("line {line}, column {col}: ")
+                let start = before.rfind('\n').map_or(0, |i| i + 1);
+                let col = before.len() - start + 1;
+                // Name the key written on that line, when there is one (`key = value`).
+                let key = text[start..]
+                    .lines()
+                    .next()
+                    .and_then(|l| l.split_once('='))
+                    .map(|(k, _)| k.trim())
+                    .filter(|k| !k.is_empty() && !k.starts_with('['))
+                    .map_or(String::new(), |k| format!(" (`{k}`)"));
+                format!("line {line}, column {col}{key}: ")
             })
             .unwrap_or_default();
         scene_err(path, format!("{at}{}", e.message().replace('\n', " ")))
