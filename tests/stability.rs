@@ -160,8 +160,8 @@ fn stiff_enclosures_iterate_to_the_tolerance_or_say_they_stopped() {
                 "{w}"
             );
             assert!(rho == 0.999, "only the 0.999 box may hit its cap");
-            // Still below the exact answer and above what the iterations reached.
-            assert!(worst < 0.5, "{worst}");
+            // Far from converged, and the estimate says how far (it bounds the real error).
+            assert!(worst < estimate, "{worst} vs estimate {estimate}");
         }
         assert!(r.stats.fallbacks.iter().all(|f| !f.contains("scheme")));
         if backend == Backend::Gpu {
