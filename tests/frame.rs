@@ -7,28 +7,12 @@ mod common;
 use antiradiance::frame::camera::{View, SUPERSAMPLE};
 use antiradiance::frame::lights::spot_falloff;
 use antiradiance::frame::Image;
-use antiradiance::gpu::{Context, ContextOptions};
 use antiradiance::render::{render, Backend, RenderOptions, Rendered, Silent};
 use antiradiance::scene::{load_scene, Light, Material, Precision, Scene};
 use common::*;
 use glam::DVec3;
 use std::f64::consts::PI;
 use std::path::Path;
-use std::sync::{Arc, OnceLock};
-
-fn context() -> Arc<Context> {
-    static CTX: OnceLock<Arc<Context>> = OnceLock::new();
-    CTX.get_or_init(|| {
-        let ctx = Context::headless(&ContextOptions {
-            validation: true,
-            device_name: None,
-        })
-        .expect("a Vulkan device (lavapipe: apt-get install mesa-vulkan-drivers)");
-        assert!(ctx.validation_enabled(), "validation layer must be active");
-        ctx
-    })
-    .clone()
-}
 
 fn run(scene: &Scene, backend: Backend, shadow: u32) -> Rendered {
     let ctx = context();

@@ -4,27 +4,11 @@
 
 mod common;
 
-use antiradiance::gpu::{Context, ContextOptions};
 use antiradiance::render::{render, Backend, RenderOptions, Rendered, Silent};
 use antiradiance::scene::{Material, Precision, Scene, Scheme};
 use antiradiance::{CpuSolver, System};
 use common::*;
 use glam::DVec3;
-use std::sync::{Arc, OnceLock};
-
-fn context() -> Arc<Context> {
-    static CTX: OnceLock<Arc<Context>> = OnceLock::new();
-    CTX.get_or_init(|| {
-        let ctx = Context::headless(&ContextOptions {
-            validation: true,
-            device_name: None,
-        })
-        .expect("a Vulkan device (lavapipe: apt-get install mesa-vulkan-drivers)");
-        assert!(ctx.validation_enabled(), "validation layer must be active");
-        ctx
-    })
-    .clone()
-}
 
 /// Renders with `backend`, checks every pixel and display texel is finite and non-negative and
 /// that validation stayed silent, and prints the run's statistics.
@@ -198,17 +182,7 @@ fn lamp_scene(scale: f64, le: f64) -> Scene {
         ],
         w,
     );
-    quad(
-        &mut s,
-        "lamp",
-        [
-            p(-0.3, 1.0, -0.3),
-            p(0.3, 1.0, -0.3),
-            p(0.3, 1.0, 0.3),
-            p(-0.3, 1.0, 0.3),
-        ],
-        e,
-    );
+    lamp(&mut s, 0.3 * scale, 1.0 * scale, e);
     s.solver.bins = 32;
     s.solver.element_size = 0.5 * scale;
     s.solver.iterations = 3;
@@ -322,17 +296,7 @@ fn nearly_touching_and_coplanar_surfaces_stay_bounded() {
         ],
         m,
     );
-    quad(
-        &mut s,
-        "lamp",
-        [
-            p(-0.3, 1.0, -0.3),
-            p(0.3, 1.0, -0.3),
-            p(0.3, 1.0, 0.3),
-            p(-0.3, 1.0, 0.3),
-        ],
-        e,
-    );
+    lamp(&mut s, 0.3, 1.0, e);
     s.solver.bins = 64;
     s.solver.element_size = 0.25;
     s.solver.iterations = 8;
@@ -384,17 +348,7 @@ fn layered(layers: usize, albedo: f64, thickness: f64) -> Scene {
     let f = s.add_material(Material::diffuse("floor", 0.5));
     floor(&mut s, 2.0, f);
     let p = DVec3::new;
-    quad(
-        &mut s,
-        "lamp",
-        [
-            p(-0.2, 2.0, -0.2),
-            p(0.2, 2.0, -0.2),
-            p(0.2, 2.0, 0.2),
-            p(-0.2, 2.0, 0.2),
-        ],
-        e,
-    );
+    lamp(&mut s, 0.2, 2.0, e);
     for k in 0..layers {
         let y = 0.3 + 1.4 * k as f64 / layers.max(1) as f64;
         add_box(

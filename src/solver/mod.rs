@@ -148,7 +148,7 @@ impl<'a> CpuSolver<'a> {
     /// asymmetric = one reflection step then `antiradiance_steps` antiradiance steps (eqs. 13–14).
     /// Records the residual and energy.
     pub fn iterate(&mut self, scheme: Scheme, antiradiance_steps: usize) {
-        let before = self.leaf_rows(&self.i_ex);
+        let before = self.i_ex.clone();
         match scheme {
             Scheme::Symmetric => self.propagate(LocalMode::Both),
             Scheme::Asymmetric => {
@@ -158,17 +158,8 @@ impl<'a> CpuSolver<'a> {
                 }
             }
         }
-        let after = self.leaf_rows(&self.i_ex);
-        let (mut diff, mut norm) = (0.0, 0.0);
-        for (a, b) in after.iter().zip(&before) {
-            diff += (*a - *b).length_squared();
-            norm += a.length_squared();
-        }
-        self.residuals.push(if norm > 0.0 {
-            (diff / norm).sqrt()
-        } else {
-            diff.sqrt()
-        });
+        self.residuals
+            .push(convergence::change(self.sys, &before, &self.i_ex).relative);
         self.energies.push(self.exitant_flux());
     }
 
@@ -178,14 +169,6 @@ impl<'a> CpuSolver<'a> {
         for _ in 0..iterations {
             self.iterate(scheme, antiradiance_steps);
         }
-    }
-
-    fn leaf_rows(&self, t: &Table) -> Vec<DVec3> {
-        self.sys
-            .leaves
-            .iter()
-            .flat_map(|l| t.row(l.node as usize).iter().copied())
-            .collect()
     }
 
     /// Flux leaving all leaves through their front bins (mean of RGB).

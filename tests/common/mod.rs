@@ -1,8 +1,26 @@
 //! Generated test scenes shared by the integration tests.
 #![allow(dead_code)]
 
+use antiradiance::gpu::{Context, ContextOptions};
 use antiradiance::scene::{Material, Scene};
 use glam::DVec3;
+use std::sync::{Arc, OnceLock};
+
+/// One headless Vulkan context per test binary, validation on (lavapipe in CI): a validation
+/// message fails the test that reads it.
+pub fn context() -> Arc<Context> {
+    static CTX: OnceLock<Arc<Context>> = OnceLock::new();
+    CTX.get_or_init(|| {
+        let ctx = Context::headless(&ContextOptions {
+            validation: true,
+            device_name: None,
+        })
+        .expect("a Vulkan device (lavapipe: apt-get install mesa-vulkan-drivers)");
+        assert!(ctx.validation_enabled(), "validation layer must be active");
+        ctx
+    })
+    .clone()
+}
 
 /// Adds a quad `a b c d` (counter-clockwise seen from its front) as two triangles.
 pub fn quad(s: &mut Scene, name: &str, p: [DVec3; 4], mat: u32) {
@@ -67,6 +85,22 @@ pub fn floor(s: &mut Scene, half: f64, mat: u32) {
             DVec3::new(half, 0.0, half),
             DVec3::new(half, 0.0, -half),
             DVec3::new(-half, 0.0, -half),
+        ],
+        mat,
+    );
+}
+
+/// Adds a square emitter of half-size `half` at height `y`, facing down (−y).
+pub fn lamp(s: &mut Scene, half: f64, y: f64, mat: u32) {
+    let p = |x: f64, z: f64| DVec3::new(x, y, z);
+    quad(
+        s,
+        "lamp",
+        [
+            p(-half, -half),
+            p(half, -half),
+            p(half, half),
+            p(-half, half),
         ],
         mat,
     );
