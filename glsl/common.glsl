@@ -25,8 +25,25 @@
 #define AR_MODE_BOTH 0u
 #define AR_MODE_REFLECT 1u
 #define AR_MODE_ANTIRADIANCE 2u
-#define AR_FLAG_DIRECT 1u
 #define AR_FLAG_HALF 2u
+
+// Specialization constants (src/gpu/layout.rs `spec`): what the scene needs (src/plan).
+#define AR_SPEC_MODE 0
+#define AR_SPEC_GLOSSY 1
+#define AR_SPEC_ANTIRADIANCE 2
+#define AR_SPEC_DIRECT 3
+#define AR_SPEC_ENVIRONMENT 4
+#define AR_SPEC_EMISSION 5
+#define AR_SPEC_SPLAT 6
+#define AR_SPEC_VERTEX 7
+layout(constant_id = AR_SPEC_MODE) const uint AR_MODE = 0u;
+layout(constant_id = AR_SPEC_GLOSSY) const bool AR_GLOSSY = true;
+layout(constant_id = AR_SPEC_ANTIRADIANCE) const bool AR_ANTIRADIANCE = true;
+layout(constant_id = AR_SPEC_DIRECT) const bool AR_DIRECT = true;
+layout(constant_id = AR_SPEC_ENVIRONMENT) const bool AR_ENVIRONMENT = true;
+layout(constant_id = AR_SPEC_EMISSION) const bool AR_EMISSION = true;
+layout(constant_id = AR_SPEC_SPLAT) const bool AR_SPLAT = true;
+layout(constant_id = AR_SPEC_VERTEX) const bool AR_VERTEX = true;
 
 struct Material {
     vec4 kd;

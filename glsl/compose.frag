@@ -27,9 +27,12 @@ void main() {
             }
             Material m = materials[e.ids.w];
             vec3 l = m.ke.rgb + ar_direct_radiance(g.xyz, n, m, wo);
+            // Only the shading kinds the scene has are compiled in (AR_VERTEX, AR_SPLAT).
             if (e.ids.z == AR_MODE_VERTEX) {
-                l += texelFetch(gbuf_vertex, t, 0).rgb;
-            } else {
+                if (AR_VERTEX) {
+                    l += texelFetch(gbuf_vertex, t, 0).rgb;
+                }
+            } else if (AR_SPLAT) {
                 vec4 s = texelFetch(splat_sum, t, 0);
                 if (s.a > 0.0) {
                     l += s.rgb / s.a;

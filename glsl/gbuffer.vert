@@ -21,7 +21,7 @@ void main() {
     leaf_out = leaf & ~AR_FILLER;
     vec3 acc = vec3(0.0);
     float w = 0.0;
-    if (vertex != 0xFFFFFFFFu) {
+    if (AR_VERTEX && vertex != 0xFFFFFFFFu) {
         vec3 wo = normalize(pc.eye.xyz - position);
         for (uint i = adj_offsets[vertex]; i < adj_offsets[vertex + 1u]; i++) {
             uint e = adj_list[i];

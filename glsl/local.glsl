@@ -1,13 +1,11 @@
-// Local pass at the leaves (eqs. 18-19), shared by the diffuse fast path and the general Phong
-// pass. Mirrors src/solver/local.rs: front bins get I_L = a c cos (kd/pi E + glossy + Ke),
+// Local pass at the leaves (eqs. 18-19): the diffuse fast path (AR_GLOSSY false) and the general
+// Phong pass are specializations of this one shader (glsl/local.frag). Mirrors src/solver/local.rs: front bins get I_L = a c cos (kd/pi E + glossy + Ke),
 // back bins get -a c |cos| L_t (antiradiance), I_total gets the reflected part without emission
 // and without the first bounce of direct light. The frozen hemisphere of the asymmetric steps is
 // copied from the current I_ex (ping-pong).
 #ifndef ANTIRADIANCE_LOCAL_GLSL
 #define ANTIRADIANCE_LOCAL_GLSL
 #include "common.glsl"
-
-layout(constant_id = 0) const uint AR_MODE = 0u;
 
 layout(binding = AR_BINDING_LEAF_EX) uniform sampler2D leaf_ex;
 layout(binding = AR_BINDING_L_PUSH) uniform sampler2D l_push;
@@ -25,12 +23,13 @@ layout(location = 1) out vec4 out_total;
 
 // Incident radiance the leaf reflects and turns into antiradiance (links + environment).
 vec3 ar_lt(uint row, uint bin) {
-    return texelFetch(l_push, ar_texel(row, bin), 0).rgb + pc.environment.rgb;
+    vec3 l = texelFetch(l_push, ar_texel(row, bin), 0).rgb;
+    return AR_ENVIRONMENT ? l + pc.environment.rgb : l;
 }
 
 // Incident direct light (reflected only).
 vec3 ar_ld(uint row, uint bin) {
-    return (pc.flags & AR_FLAG_DIRECT) != 0u ? texelFetch(direct, ar_texel(row, bin), 0).rgb : vec3(0.0);
+    return AR_DIRECT ? texelFetch(direct, ar_texel(row, bin), 0).rgb : vec3(0.0);
 }
 
 // The lobe as the bins sample it (src/brdf.rs DiscreteLobe): the material record carries the
@@ -41,7 +40,7 @@ vec3 ar_phong(vec3 ks, float ns, vec3 n, vec3 incident, vec3 outgoing, float fac
     return c <= 0.0 ? vec3(0.0) : ks * ((ns + 2.0) / (2.0 * AR_PI) * pow(c, ns) * factor);
 }
 
-void ar_local(bool glossy) {
+void ar_local() {
     ivec2 p = ivec2(gl_FragCoord.xy);
     uint row = ar_row_at(p);
     uint j = ar_bin_at(p);
@@ -64,8 +63,8 @@ void ar_local(bool glossy) {
             vec3 e_t = texelFetch(irradiance_t, ar_row_texel(row), 0).rgb;
             vec3 e_d = texelFetch(irradiance_d, ar_row_texel(row), 0).rgb;
             vec3 r_t = mat.kd.rgb / AR_PI * e_t;
-            vec3 r_d = mat.kd.rgb / AR_PI * e_d;
-            if (glossy) {
+            vec3 r_d = AR_DIRECT ? mat.kd.rgb / AR_PI * e_d : vec3(0.0);
+            if (AR_GLOSSY) {
                 for (uint l = 0u; l < pc.bins; ++l) {
                     vec3 inc = centers[l].xyz;
                     float cos_l = -dot(inc, n);
@@ -73,17 +72,20 @@ void ar_local(bool glossy) {
                         float factor = texelFetch(lobe_norm, ar_texel(row, l), 0).r;
                         vec3 f = ar_phong(mat.ks_ns.rgb, mat.ks_ns.a, n, inc, dir, factor) * (cos_l * pc.omega * c);
                         r_t += f * ar_lt(row, l);
-                        r_d += f * ar_ld(row, l);
+                        if (AR_DIRECT) {
+                            r_d += f * ar_ld(row, l);
+                        }
                     }
                 }
             }
             tot = base * r_t;
-            ex = base * (r_t + r_d + mat.ke.rgb * pc.environment.a);
+            vec3 ke = AR_EMISSION ? mat.ke.rgb * pc.environment.a : vec3(0.0);
+            ex = base * (r_t + r_d + ke);
         }
     } else if (cj < 0.0) {
         if (AR_MODE == AR_MODE_REFLECT) {
             ex = old;
-        } else {
+        } else if (AR_ANTIRADIANCE) {
             ex = -(a * c * -cj) * ar_lt(row, j);
         }
     }

@@ -16,15 +16,15 @@ void main() {
     uint row = ar_row_at_row_image(ivec2(gl_FragCoord.xy));
     vec3 n = texelFetch(attr_normal_area, ar_row_texel(row), 0).xyz;
     float c = texelFetch(attr_leaf, ar_row_texel(row), 0).x;
-    bool has_direct = (pc.flags & AR_FLAG_DIRECT) != 0u;
     vec3 st = vec3(0.0);
     vec3 sd = vec3(0.0);
     for (uint l = 0u; l < pc.bins; ++l) {
         float cos_l = -dot(centers[l].xyz, n);
         if (cos_l > 0.0) {
             float wt = cos_l * pc.omega * c;
-            st += (texelFetch(l_push, ar_texel(row, l), 0).rgb + pc.environment.rgb) * wt;
-            if (has_direct) {
+            vec3 lt = texelFetch(l_push, ar_texel(row, l), 0).rgb;
+            st += (AR_ENVIRONMENT ? lt + pc.environment.rgb : lt) * wt;
+            if (AR_DIRECT) {
                 sd += texelFetch(direct, ar_texel(row, l), 0).rgb * wt;
             }
         }

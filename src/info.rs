@@ -1,5 +1,8 @@
 //! Scene statistics for `antiradiance info`: sizes, linking time, memory by resource, passes.
 
+use crate::error::Result;
+use crate::frame::surfaces::Surfaces;
+use crate::plan::{Plan, Shading};
 use crate::scene::{Precision, Scene};
 use crate::system::System;
 use serde::Serialize;
@@ -30,71 +33,40 @@ pub struct Info {
     pub linking_ms: f64,
     /// Links built per second.
     pub links_per_second: f64,
-    /// Bytes by resource (GPU layout of §4.1 at the scene's precision; `cpu_tables` for the solver).
+    /// Bytes by resource: the GPU solver's images and buffers as the plan creates them (§4.1 at
+    /// the plan's precision), `frame_images` for the frame at the camera's size, `cpu_tables` for
+    /// the f64 solver.
     pub memory_bytes: BTreeMap<String, u64>,
-    /// Passes a render of this scene runs, in order.
+    /// Passes a render of this scene runs, in order (the scene analysis, [`Plan::passes`]).
     pub passes: Vec<String>,
+    /// What the analysis decided and why.
+    pub decisions: Vec<String>,
+    /// Indirect-light shading per object.
+    pub shading: BTreeMap<String, Shading>,
+    /// Table precision of a GPU render.
+    pub precision: Precision,
+    /// True when `--all-passes` forced everything on.
+    pub all_passes: bool,
     /// Loader warnings.
     pub warnings: Vec<String>,
 }
 
-/// Bytes of one GPU link vertex (receiver, sender, packed bins, form factor, cone).
-pub const LINK_BYTES: u64 = 20;
-
-/// The passes a render of `scene` runs, in execution order.
-pub fn passes(scene: &Scene) -> Vec<String> {
-    let mut p = Vec::new();
-    for kind in ["directional", "spot", "point"] {
-        if scene.lights.iter().any(|l| l.kind() == kind) {
-            p.push(format!("shadow_{kind}"));
-        }
-    }
-    if !scene.lights.is_empty() {
-        p.push("direct_init".into());
-    }
-    if scene.environment.max_element() > 0.0 {
-        p.push("environment_init".into());
-    }
-    p.extend(["global", "push"].map(String::from));
-    let glossy = scene.materials.iter().any(|m| m.is_glossy());
-    let diffuse = scene.materials.iter().any(|m| !m.is_glossy());
-    if diffuse {
-        p.push("local_diffuse".into());
-    }
-    if glossy {
-        p.push("local_glossy".into());
-    }
-    p.push("pull".into());
-    p
-}
-
 impl Info {
-    /// Gathers the statistics of a built system.
-    pub fn new(scene: &Scene, sys: &System) -> Self {
+    /// Gathers the statistics of a built system and its plan (see [`Plan::new`]).
+    pub fn new(scene: &Scene, sys: &System, plan: &Plan) -> Result<Self> {
         let rows = sys.rows() as u64;
         let m = sys.bins.count as u64;
-        let texel = match scene.solver.precision {
-            Precision::F16 => 8,
-            Precision::F32 => 16,
-        };
-        let mut mem = BTreeMap::new();
-        // I_ex ping-pong pair, L_in, pushed L_in, I_total.
-        mem.insert("tables".into(), 5 * rows * m * texel);
-        mem.insert("links".into(), sys.links.len() as u64 * LINK_BYTES);
-        mem.insert("filter_tables".into(), sys.filters.dense_bytes());
-        mem.insert(
-            "element_attributes".into(),
-            sys.leaves.len() as u64 * 3 * 16,
-        );
-        let pull_lines: u64 = sys
-            .hierarchy
-            .leaves
-            .iter()
-            .map(|&l| sys.hierarchy.nodes[l as usize].depth as u64)
-            .sum();
-        mem.insert("push_pull_primitives".into(), (pull_lines + rows) * 8);
+        let gpu = crate::gpu::resources::Resources::planned_memory(
+            sys,
+            &plan.features,
+            plan.precision,
+            16384,
+        )?;
+        let mut mem = gpu.by_name();
+        mem.remove("total");
+        mem.insert("frame_images".into(), frame_bytes(scene, plan));
         mem.insert("cpu_tables".into(), 4 * rows * m * 24);
-        Self {
+        Ok(Self {
             scene: scene
                 .path
                 .as_ref()
@@ -110,9 +82,19 @@ impl Info {
             linking_ms: sys.links.linking_ms,
             links_per_second: sys.links.links_per_second(),
             memory_bytes: mem,
-            passes: passes(scene),
+            passes: plan.passes(),
+            decisions: plan.decisions.clone(),
+            shading: plan.shading.clone(),
+            precision: plan.precision,
+            all_passes: plan.all_passes,
             warnings: scene.warnings.clone(),
-        }
+        })
+    }
+
+    /// [`Info::new`] with the plan of a render (`all_passes` as `--all-passes`).
+    pub fn of(scene: &Scene, sys: &System, all_passes: bool) -> Result<Self> {
+        let surf = Surfaces::new(scene, sys);
+        Self::new(scene, sys, &Plan::new(scene, sys, &surf, all_passes))
     }
 
     /// Human-readable multi-line summary.
@@ -126,6 +108,23 @@ impl Info {
             s += &format!("  {k:<22}{:>10.2} MB\n", *v as f64 / 1e6);
         }
         s += &format!("passes     {}\n", self.passes.join(", "));
+        for d in &self.decisions {
+            s += &format!("  - {d}\n");
+        }
         s
     }
+}
+
+/// Bytes of the frame's images at the camera's size (G-buffer at 2×2 samples, the vertex-radiance
+/// and splat targets only where the plan draws them, the output; shadow maps not included).
+fn frame_bytes(scene: &Scene, plan: &Plan) -> u64 {
+    let ss = crate::frame::camera::SUPERSAMPLE as u64;
+    let (w, h) = (scene.camera.width as u64, scene.camera.height as u64);
+    let samples = w * h * ss * ss;
+    let f = &plan.features;
+    // Position (RGBA32F) + depth (D32), vertex radiance and splat sums (RGBA32F), output.
+    samples * (16 + 4)
+        + if f.vertex { samples * 16 } else { 16 }
+        + if f.splat { samples * 16 } else { 16 }
+        + w * h * 16
 }

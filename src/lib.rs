@@ -19,6 +19,7 @@ pub mod hierarchy;
 pub mod info;
 pub mod linker;
 pub mod metrics;
+pub mod plan;
 pub mod profile;
 pub mod raycast;
 pub mod reference;

@@ -25,6 +25,8 @@ enum Command {
         /// Print JSON instead of text.
         #[arg(long)]
         json: bool,
+        #[command(flatten)]
+        plan: PlanArgs,
     },
     /// Render the scene from its camera to PNG and/or EXR (default: out.png).
     Render {
@@ -75,6 +77,8 @@ enum Command {
         /// Vulkan device whose name contains this (default: prefer a discrete GPU).
         #[arg(long)]
         device: Option<String>,
+        #[command(flatten)]
+        plan: PlanArgs,
     },
     /// Path-traced ground truth (unbiased, CPU, all cores) to EXR, with its direct part and
     /// per-pixel standard error beside it (REF.direct.exr, REF.stderr.exr).
@@ -179,7 +183,44 @@ enum Command {
         /// Vulkan device whose name contains this (default: prefer a discrete GPU).
         #[arg(long)]
         device: Option<String>,
+        #[command(flatten)]
+        plan: PlanArgs,
     },
+}
+
+/// What runs: the scene analysis' plan unless forced, and settings chosen for an error target.
+#[derive(clap::Args)]
+struct PlanArgs {
+    /// Run every pass and create every table (float32) whether the scene needs it or not.
+    #[arg(long)]
+    all_passes: bool,
+    /// Choose bins, element size and iterations for this relative RMSE from measured
+    /// error-vs-time data (replaces the scene's and --bins/--iterations).
+    #[arg(long)]
+    target_error: Option<f64>,
+}
+
+impl PlanArgs {
+    fn check(&self) -> Result<()> {
+        if let Some(e) = self.target_error {
+            anyhow::ensure!(
+                e > 0.0 && e.is_finite(),
+                "--target-error must be positive, got {e}"
+            );
+        }
+        Ok(())
+    }
+
+    /// Applies --target-error to `s` (after checking it) and says what it chose.
+    fn retarget(&self, s: &mut Scene) -> Result<()> {
+        self.check()?;
+        if let Some(e) = self.target_error {
+            let c = antiradiance::plan::target::choose(s, e);
+            eprintln!("{}", c.summary());
+            antiradiance::plan::target::apply(s, &c);
+        }
+        Ok(())
+    }
 }
 
 /// Progress bars on stderr for the library's long steps.
@@ -399,22 +440,25 @@ fn run(cli: Cli) -> Result<()> {
             precision,
             json,
             device,
+            plan,
         } => {
             let mut s = load(scene)?;
             apply_overrides(&mut s, None, bins, None, precision)?;
+            plan.retarget(&mut s)?;
             let ctx = antiradiance::gpu::Context::headless(&antiradiance::gpu::ContextOptions {
                 validation: false,
                 device_name: device,
             })?;
-            let report = antiradiance::profile::profile(ctx, &s, frames, warmup)
+            let report = antiradiance::profile::profile(ctx, &s, frames, warmup, plan.all_passes)
                 .with_context(|| scene_name(&s))?;
             print!("{}", report.text());
             write_json(&json, &report)?;
         }
-        Command::Info { scene, json } => {
-            let s = load(scene)?;
+        Command::Info { scene, json, plan } => {
+            let mut s = load(scene)?;
+            plan.retarget(&mut s)?;
             let sys = System::build(&s).with_context(|| scene_name(&s))?;
-            let info = Info::new(&s, &sys);
+            let info = Info::of(&s, &sys, plan.all_passes).with_context(|| scene_name(&s))?;
             if json {
                 println!("{}", serde_json::to_string_pretty(&info)?);
             } else {
@@ -438,9 +482,11 @@ fn run(cli: Cli) -> Result<()> {
             backend,
             shadow_map_size,
             device,
+            plan,
         } => {
             let mut s = load(scene)?;
             apply_overrides(&mut s, iterations, bins, scheme, precision)?;
+            plan.check()?;
             if let Some(t) = tolerance {
                 anyhow::ensure!(t > 0.0 && t < 1.0, "--tolerance must be in (0, 1), got {t}");
                 s.solver.tolerance = Some(t);
@@ -461,8 +507,13 @@ fn run(cli: Cli) -> Result<()> {
                 shadow_map_size,
                 device,
                 validation: false,
+                all_passes: plan.all_passes,
+                target_error: plan.target_error,
             };
             let r = render::render(&s, &opts, &Bars::default()).with_context(|| scene_name(&s))?;
+            if let Some(c) = &r.stats.target {
+                eprintln!("{}", c.summary());
+            }
             for f in &r.stats.fallbacks {
                 eprintln!("fallback: {f}");
             }

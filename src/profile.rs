@@ -4,6 +4,7 @@
 
 use crate::error::Result;
 use crate::gpu::{Context, GpuOptions, GpuSolver};
+use crate::plan::Plan;
 use crate::scene::{Scene, Scheme};
 use crate::system::System;
 use serde::Serialize;
@@ -78,22 +79,54 @@ pub struct ProfileReport {
     pub fragments: BTreeMap<String, u64>,
     /// Departures from the requested configuration.
     pub fallbacks: Vec<String>,
+    /// The passes the scene's plan runs (README, "Passes a scene needs").
+    pub plan: Vec<String>,
+    /// What the scene analysis decided and why.
+    pub decisions: Vec<String>,
+    /// The plan against every pass on (absent with `--all-passes`).
+    pub savings: Option<Savings>,
 }
 
-/// Builds the scene's system, warms up, then times `frames` frames.
-pub fn profile(
-    ctx: Arc<Context>,
+/// The same scene profiled with `--all-passes`: what the plan saves.
+#[derive(Debug, Clone, Serialize)]
+pub struct Savings {
+    /// Median frame with every pass on (float32 tables), ms.
+    pub all_passes_median_ms: f64,
+    /// Median frame of the plan, ms.
+    pub plan_median_ms: f64,
+    /// Their difference, ms per frame (positive: the plan is faster).
+    pub saved_ms: f64,
+    /// GPU memory with every pass on, bytes.
+    pub all_passes_bytes: u64,
+    /// GPU memory of the plan, bytes.
+    pub plan_bytes: u64,
+}
+
+struct Timed {
+    per_pass: BTreeMap<String, Vec<f64>>,
+    totals: Vec<f64>,
+    memory: crate::gpu::resources::MemoryReport,
+    fragments: crate::gpu::solver::Fragments,
+    fallbacks: Vec<String>,
+}
+
+/// Warms up and times `frames` iterations of `scene`'s scheme with `plan`.
+fn time_frames(
+    ctx: &Arc<Context>,
     scene: &Scene,
+    sys: &System,
+    plan: &Plan,
     frames: usize,
     warmup: usize,
-) -> Result<ProfileReport> {
-    let sys = System::build_within(scene, Some(ctx.info.device_local_bytes))?;
+    label: &str,
+) -> Result<Timed> {
     let st = &scene.solver;
     let mut gpu = GpuSolver::new(
         ctx.clone(),
-        &sys,
+        sys,
         GpuOptions {
-            precision: st.precision,
+            precision: plan.precision,
+            features: Some(plan.features),
             ..Default::default()
         },
     )?;
@@ -114,25 +147,65 @@ pub fn profile(
         for (name, ms) in frame {
             per_pass.entry(name).or_default().push(ms);
         }
-        eprint!("\rprofile: frame {}/{frames}", f + 1);
+        eprint!("\rprofile{label}: frame {}/{frames}", f + 1);
     }
     if frames > 0 {
         eprintln!();
     }
-    let props = match st.scheme {
-        Scheme::Symmetric => 1,
-        Scheme::Asymmetric => 1 + st.antiradiance_steps as u64,
+    let mut fallbacks: Vec<String> = plan.precision_fallback.iter().cloned().collect();
+    fallbacks.extend(gpu.fallbacks().iter().cloned());
+    Ok(Timed {
+        per_pass,
+        totals,
+        memory: gpu.memory(),
+        fragments: gpu.fragments(),
+        fallbacks,
+    })
+}
+
+/// Builds the scene's system and plan, warms up, then times `frames` frames. Unless
+/// `all_passes` (then only everything-on is timed), the same frames are also timed with every
+/// pass on, and the report says what the plan saved.
+pub fn profile(
+    ctx: Arc<Context>,
+    scene: &Scene,
+    frames: usize,
+    warmup: usize,
+    all_passes: bool,
+) -> Result<ProfileReport> {
+    let sys = System::build_within(scene, Some(ctx.info.device_local_bytes))?;
+    let st = &scene.solver;
+    let surf = crate::frame::surfaces::Surfaces::new(scene, &sys);
+    let plan = Plan::new(scene, &sys, &surf, all_passes);
+    let t = time_frames(&ctx, scene, &sys, &plan, frames, warmup, "")?;
+    let median = |v: &[f64]| PassStats::of(v).median_ms;
+    let savings = if all_passes {
+        None
+    } else {
+        let everything = Plan::everything(scene, &sys, &surf);
+        let a = time_frames(
+            &ctx,
+            scene,
+            &sys,
+            &everything,
+            frames,
+            warmup,
+            " (all passes)",
+        )?;
+        Some(Savings {
+            all_passes_median_ms: median(&a.totals),
+            plan_median_ms: median(&t.totals),
+            saved_ms: median(&a.totals) - median(&t.totals),
+            all_passes_bytes: a.memory.total,
+            plan_bytes: t.memory.total,
+        })
     };
-    let fr = gpu.fragments();
-    let mem = gpu.memory();
-    let memory_bytes = BTreeMap::from([
-        ("tables".to_string(), mem.tables),
-        ("links".to_string(), mem.links),
-        ("filter_tables".to_string(), mem.filter_tables),
-        ("element_attributes".to_string(), mem.element_attributes),
-        ("push_pull_primitives".to_string(), mem.push_pull_primitives),
-        ("total".to_string(), mem.total),
-    ]);
+    // Propagations per frame: the asymmetric scheme's antiradiance steps only where planned.
+    let props = match st.scheme {
+        Scheme::Asymmetric if plan.features.antiradiance => 1 + st.antiradiance_steps as u64,
+        _ => 1,
+    };
+    let fr = &t.fragments;
     let fragments = BTreeMap::from([
         ("global".to_string(), fr.global * props),
         ("push".to_string(), fr.push * props),
@@ -151,18 +224,22 @@ pub fn profile(
         links: sys.links.links.len(),
         bins: sys.bins.count,
         scheme: format!("{:?}", st.scheme).to_lowercase(),
-        precision: format!("{:?}", st.precision).to_lowercase(),
+        precision: format!("{:?}", plan.precision).to_lowercase(),
         frames,
         linking_ms: sys.links.linking_ms,
         meshing_ms: sys.meshing_ms,
-        passes: per_pass
+        passes: t
+            .per_pass
             .iter()
             .map(|(k, v)| (k.clone(), PassStats::of(v)))
             .collect(),
-        frame: PassStats::of(&totals),
-        memory_bytes,
+        frame: PassStats::of(&t.totals),
+        memory_bytes: t.memory.by_name(),
         fragments,
-        fallbacks: gpu.fallbacks().to_vec(),
+        fallbacks: t.fallbacks,
+        plan: plan.passes(),
+        decisions: plan.decisions.clone(),
+        savings,
     })
 }
 
@@ -197,6 +274,22 @@ impl ProfileReport {
         );
         for f in &self.fallbacks {
             s += &format!("fallback: {f}\n");
+        }
+        s += &format!("plan: {}\n", self.plan.join(", "));
+        for d in &self.decisions {
+            s += &format!("  - {d}\n");
+        }
+        if let Some(v) = &self.savings {
+            s += &format!(
+                "all passes: {:.2} ms per frame, {:.1} MB; plan: {:.2} ms, {:.1} MB; saved {:.2} ms per frame ({:.0}%), {:.1} MB\n",
+                v.all_passes_median_ms,
+                v.all_passes_bytes as f64 / (1 << 20) as f64,
+                v.plan_median_ms,
+                v.plan_bytes as f64 / (1 << 20) as f64,
+                v.saved_ms,
+                100.0 * v.saved_ms / v.all_passes_median_ms.max(1e-9),
+                (v.all_passes_bytes as f64 - v.plan_bytes as f64) / (1 << 20) as f64
+            );
         }
         s
     }

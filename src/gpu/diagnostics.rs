@@ -86,7 +86,7 @@ fn draw_lines(
                 additive: true,
                 write: true,
             }],
-            mode: None,
+            specialization: &[],
             per_vertex: false,
             depth: false,
         },

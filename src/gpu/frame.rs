@@ -6,8 +6,8 @@
 
 use super::context::Context;
 use super::layout::{
-    as_bytes, bin_centers, frame_binding as fb, CornerVertex, FrameConstants, GpuFrameElement,
-    GpuLight, GpuMaterial, GpuShadowView,
+    as_bytes, bin_centers, frame_binding as fb, spec, CornerVertex, FrameConstants,
+    GpuFrameElement, GpuLight, GpuMaterial, GpuShadowView,
 };
 use super::memory::{Buffer, Image, DEPTH_FORMAT};
 use super::passes::{self, FramePass};
@@ -22,6 +22,7 @@ use crate::frame::camera::{View, SUPERSAMPLE};
 use crate::frame::shadow::ShadowMaps;
 use crate::frame::surfaces::{Surfaces, MODE_SPLAT};
 use crate::frame::Image as Frame;
+use crate::plan::Features;
 use crate::scene::{Light, Scene};
 use crate::system::System;
 use ash::vk;
@@ -83,9 +84,19 @@ pub struct GpuFrame {
     constants: FrameConstants,
     corner_count: u32,
     splat_count: u32,
+    features: Features,
     views: u32,
     shadow_size: u32,
     timings: Vec<(String, f64)>,
+}
+
+/// An overwritten (not blended) color target.
+fn put_target(format: vk::Format) -> Target {
+    Target {
+        format,
+        additive: false,
+        write: true,
+    }
 }
 
 fn mat(m: DMat4) -> [[f32; 4]; 4] {
@@ -138,6 +149,7 @@ impl GpuFrame {
         sys: &System,
         surf: &Surfaces,
         maps: &ShadowMaps,
+        features: &Features,
     ) -> Result<Self> {
         let c = &ctx;
         let vb = vk::BufferUsageFlags::VERTEX_BUFFER;
@@ -175,8 +187,14 @@ impl GpuFrame {
             }
         }
         let splats: Vec<u32> = (0..sys.leaves.len() as u32)
-            .filter(|&li| surf.mode[li as usize] == MODE_SPLAT)
+            .filter(|&li| features.splat && surf.mode[li as usize] == MODE_SPLAT)
             .collect();
+        // Shared-vertex adjacency only where smooth meshes are interpolated.
+        let (adj_offsets, adj_list) = if features.vertex {
+            (surf.adjacency_offsets.clone(), surf.adjacency.clone())
+        } else {
+            (Vec::new(), Vec::new())
+        };
         let elements: Vec<GpuFrameElement> = sys
             .leaves
             .iter()
@@ -221,19 +239,11 @@ impl GpuFrame {
             ),
             (
                 fb::ADJ_OFFSETS,
-                c.upload_buffer(
-                    "shared-vertex offsets",
-                    as_bytes(&padded(surf.adjacency_offsets.clone())),
-                    sb,
-                )?,
+                c.upload_buffer("shared-vertex offsets", as_bytes(&padded(adj_offsets)), sb)?,
             ),
             (
                 fb::ADJ_LIST,
-                c.upload_buffer(
-                    "shared-vertex elements",
-                    as_bytes(&padded(surf.adjacency.clone())),
-                    sb,
-                )?,
+                c.upload_buffer("shared-vertex elements", as_bytes(&padded(adj_list)), sb)?,
             ),
             (
                 fb::LIGHTS,
@@ -271,9 +281,18 @@ impl GpuFrame {
                 DEPTH_FORMAT,
             )?,
             gbuf_position: c.create_image("G-buffer position", sw, sh, RGBA32F)?,
-            gbuf_vertex: c.create_image("G-buffer vertex radiance", sw, sh, RGBA32F)?,
+            // Scenes without smooth meshes / flat surfaces get 1×1 placeholders (never read).
+            gbuf_vertex: if features.vertex {
+                c.create_image("G-buffer vertex radiance", sw, sh, RGBA32F)?
+            } else {
+                c.create_image("G-buffer vertex radiance (none)", 1, 1, RGBA32F)?
+            },
             gbuf_depth: c.create_image("G-buffer depth", sw, sh, DEPTH_FORMAT)?,
-            splat: c.create_image("splat sums", sw, sh, RGBA32F)?,
+            splat: if features.splat {
+                c.create_image("splat sums", sw, sh, RGBA32F)?
+            } else {
+                c.create_image("splat sums (none)", 1, 1, RGBA32F)?
+            },
             output: c.create_image("frame", w, h, RGBA32F)?,
         };
         let kinds = descriptor_kinds(fb::COUNT, &fb::BUFFERS);
@@ -283,7 +302,7 @@ impl GpuFrame {
             &kinds,
             std::mem::size_of::<FrameConstants>() as u32,
         )?;
-        let pipes = Self::pipelines(c, layouts.pipeline)?;
+        let pipes = Self::pipelines(c, layouts.pipeline, features)?;
         let sampler = texel_sampler(c, "frame sampler")?;
         let pool = descriptor_pool(c, &kinds, 1, "frame descriptor pool")?;
         let set = unsafe {
@@ -311,6 +330,7 @@ impl GpuFrame {
         let frame = Self {
             corner_count: corners.len() as u32,
             splat_count: splats.len() as u32,
+            features: *features,
             views: nviews,
             shadow_size: s,
             ctx: ctx.clone(),
@@ -327,40 +347,49 @@ impl GpuFrame {
         };
         frame.write_set(None);
         let mut frame = frame;
-        // Without lights the compose pass still binds the (then unused) shadow map: give it a
-        // defined layout once.
+        // Images the scene does not need are still bound (the shaders skip them by
+        // specialization): give them a defined layout and content once.
+        let ctx = frame.ctx.clone();
+        let im = &mut frame.images;
+        let mut unused: Vec<(&mut Image, f32)> = Vec::new();
         if frame.views == 0 {
-            let ctx = frame.ctx.clone();
-            let im = &mut frame.images.shadow_map;
+            unused.push((&mut im.shadow_map, crate::frame::shadow::EMPTY));
+        }
+        if !features.vertex {
+            unused.push((&mut im.gbuf_vertex, 0.0));
+        }
+        if !features.splat {
+            unused.push((&mut im.splat, 0.0));
+        }
+        if !unused.is_empty() {
             ctx.submit_and_wait(|cmd| {
-                super::barrier::transition(
-                    &ctx,
-                    cmd,
-                    &mut [(&mut *im, super::barrier::Access::Attachment)],
-                );
-                passes::begin_rendering(
-                    &ctx,
-                    cmd,
-                    &[(&*im, passes::Load::ClearTo(crate::frame::shadow::EMPTY))],
-                );
-                passes::end_rendering(&ctx, cmd);
-                super::barrier::transition(
-                    &ctx,
-                    cmd,
-                    &mut [(&mut *im, super::barrier::Access::Sampled)],
-                );
+                for (img, value) in unused {
+                    let access = super::barrier::Access::Attachment;
+                    super::barrier::transition(&ctx, cmd, &mut [(&mut *img, access)]);
+                    let load = passes::Load::ClearTo(value);
+                    passes::begin_rendering(&ctx, cmd, &[(&*img, load)]);
+                    passes::end_rendering(&ctx, cmd);
+                    let access = super::barrier::Access::Sampled;
+                    super::barrier::transition(&ctx, cmd, &mut [(&mut *img, access)]);
+                }
             })?;
         }
         Ok(frame)
     }
 
-    fn pipelines(c: &Context, layout: vk::PipelineLayout) -> Result<FramePipelines> {
-        let stride = std::mem::size_of::<CornerVertex>() as u32;
-        let put = |format| Target {
-            format,
-            additive: false,
-            write: true,
+    fn pipelines(
+        c: &Context,
+        layout: vk::PipelineLayout,
+        features: &Features,
+    ) -> Result<FramePipelines> {
+        let specialization = spec::values(features, 0, false);
+        let gbuffer_targets: &[Target] = if features.vertex {
+            &[put_target(RGBA32F), put_target(RGBA32F)]
+        } else {
+            &[put_target(RGBA32F)]
         };
+        let stride = std::mem::size_of::<CornerVertex>() as u32;
+        let put = put_target;
         let position = (vk::Format::R32G32B32_SFLOAT, 0);
         let desc = |name, vert, frag| PipelineDesc {
             name,
@@ -370,7 +399,7 @@ impl GpuFrame {
             stride: 0,
             attributes: &[],
             targets: &[],
-            mode: None,
+            specialization: &specialization,
             per_vertex: true,
             depth: false,
         };
@@ -396,7 +425,7 @@ impl GpuFrame {
                         (vk::Format::R32_UINT, 12),
                         (vk::Format::R32_UINT, 16),
                     ],
-                    targets: &[put(RGBA32F), put(RGBA32F)],
+                    targets: gbuffer_targets,
                     depth: true,
                     ..desc("gbuffer", "gbuffer.vert", "gbuffer.frag")
                 },
@@ -554,18 +583,21 @@ impl GpuFrame {
             self.buffers.corners.raw,
             self.corner_count,
             constants,
+            self.features.vertex,
         );
         self.profiler.end(&ctx, cmd);
-        self.profiler.begin(&ctx, cmd, "splat");
-        passes::splat::record(
-            &p,
-            self.pipes.splat,
-            &mut self.images,
-            self.buffers.splats.raw,
-            self.splat_count,
-            constants,
-        );
-        self.profiler.end(&ctx, cmd);
+        if self.features.splat {
+            self.profiler.begin(&ctx, cmd, "splat");
+            passes::splat::record(
+                &p,
+                self.pipes.splat,
+                &mut self.images,
+                self.buffers.splats.raw,
+                self.splat_count,
+                constants,
+            );
+            self.profiler.end(&ctx, cmd);
+        }
         self.profiler.begin(&ctx, cmd, "compose");
         passes::compose::record(&p, self.pipes.compose, &mut self.images, constants);
         self.profiler.end(&ctx, cmd);

@@ -20,15 +20,13 @@ pub struct PassConstants {
     pub line_offset: f32,
     /// Bin solid angle `4π/m`.
     pub omega: f32,
-    /// Bit 0: a direct-light table is bound; bit 1: tables are float16.
+    /// Bit 1: tables are float16 (bit 0 is unused: direct light is a specialization constant).
     pub flags: u32,
     /// Constant environment radiance times the source scale (rgb); the source scale (a), a
     /// power of two that every emitted radiance is multiplied by to centre values in float16's range.
     pub environment: [f32; 4],
 }
 
-/// `PassConstants::flags` bit: the direct-light table is valid.
-pub const FLAG_DIRECT: u32 = 1;
 /// `PassConstants::flags` bit: tables are float16; shaders round stores to nearest.
 pub const FLAG_HALF: u32 = 2;
 
@@ -265,6 +263,43 @@ pub mod mode {
     pub const ANTIRADIANCE: u32 = 2;
 }
 
+/// Specialization constant ids (`AR_SPEC_*` in common.glsl): a pipeline's values come from the
+/// scene's [`crate::plan::Features`], so a pass a scene does not need compiles away.
+pub mod spec {
+    /// Local-pass mode ([`super::mode`]).
+    pub const MODE: u32 = 0;
+    /// The local pass runs the general BRDF (Phong) sum.
+    pub const GLOSSY: u32 = 1;
+    /// The local pass writes antiradiance into the back bins.
+    pub const ANTIRADIANCE: u32 = 2;
+    /// Direct light from the direct-light table is reflected.
+    pub const DIRECT: u32 = 3;
+    /// The environment is added to the incident light.
+    pub const ENVIRONMENT: u32 = 4;
+    /// Emission is added in the local pass.
+    pub const EMISSION: u32 = 5;
+    /// The frame splats flat-surface elements.
+    pub const SPLAT: u32 = 6;
+    /// The frame interpolates smooth meshes per vertex.
+    pub const VERTEX: u32 = 7;
+    /// Number of constants.
+    pub const COUNT: usize = 8;
+
+    /// The values of every constant for `features` and local-pass mode `mode`.
+    pub fn values(f: &crate::plan::Features, mode: u32, glossy: bool) -> [u32; COUNT] {
+        [
+            mode,
+            glossy as u32,
+            f.antiradiance as u32,
+            f.direct as u32,
+            f.environment as u32,
+            f.emission as u32,
+            f.splat as u32,
+            f.vertex as u32,
+        ]
+    }
+}
+
 /// Views a slice of plain `#[repr(C)]` records as bytes for upload.
 pub fn as_bytes<T: Copy>(v: &[T]) -> &[u8] {
     // SAFETY: the layout types are repr(C) with only u32/f32 fields and no padding.
@@ -417,7 +452,24 @@ mod tests {
                 line.trim()
             );
         }
-        assert!(COMMON.contains(&format!("#define AR_FLAG_DIRECT {FLAG_DIRECT}u\n")));
+        for (name, value) in [
+            ("MODE", spec::MODE),
+            ("GLOSSY", spec::GLOSSY),
+            ("ANTIRADIANCE", spec::ANTIRADIANCE),
+            ("DIRECT", spec::DIRECT),
+            ("ENVIRONMENT", spec::ENVIRONMENT),
+            ("EMISSION", spec::EMISSION),
+            ("SPLAT", spec::SPLAT),
+            ("VERTEX", spec::VERTEX),
+        ] {
+            let line = format!("#define AR_SPEC_{name} {value}\n");
+            assert!(
+                COMMON.contains(&line),
+                "common.glsl lacks `{}`",
+                line.trim()
+            );
+        }
+        assert_eq!(spec::COUNT, 8);
         assert!(COMMON.contains(&format!("#define AR_FLAG_HALF {FLAG_HALF}u\n")));
     }
 }

@@ -36,8 +36,9 @@ pub struct PipelineDesc<'a> {
     pub attributes: &'a [(vk::Format, u32)],
     /// Color targets.
     pub targets: &'a [Target],
-    /// Value of specialization constant 0 (the local-pass mode), if the shader has it.
-    pub mode: Option<u32>,
+    /// Specialization constants of both stages, constant_id = index
+    /// ([`super::layout::spec::values`]); empty: the shaders' defaults (everything on).
+    pub specialization: &'a [u32],
     /// Vertex records advance per vertex (true) or per instance (false, the solver's passes).
     pub per_vertex: bool,
     /// Reversed depth test (greater: depth 1 is near) and write against a [`super::memory::DEPTH_FORMAT`] attachment.
@@ -200,27 +201,32 @@ pub fn create(
     };
     let vs = module(desc.vert)?;
     let fs = module(desc.frag).inspect_err(|_| unsafe { d.destroy_shader_module(vs, None) })?;
-    let spec_data = desc.mode.unwrap_or(0).to_ne_bytes();
-    let spec_entries = [vk::SpecializationMapEntry::default()
-        .constant_id(0)
-        .offset(0)
-        .size(4)];
+    let spec_data: Vec<u8> = desc
+        .specialization
+        .iter()
+        .flat_map(|v| v.to_ne_bytes())
+        .collect();
+    let spec_entries: Vec<_> = (0..desc.specialization.len() as u32)
+        .map(|i| {
+            vk::SpecializationMapEntry::default()
+                .constant_id(i)
+                .offset(4 * i)
+                .size(4)
+        })
+        .collect();
     let spec = vk::SpecializationInfo::default()
         .map_entries(&spec_entries)
         .data(&spec_data);
-    let mut fs_stage = vk::PipelineShaderStageCreateInfo::default()
-        .stage(vk::ShaderStageFlags::FRAGMENT)
-        .module(fs)
-        .name(MAIN);
-    if desc.mode.is_some() {
-        fs_stage = fs_stage.specialization_info(&spec);
-    }
-    let stages = [
+    let stage = |flags, module| {
         vk::PipelineShaderStageCreateInfo::default()
-            .stage(vk::ShaderStageFlags::VERTEX)
-            .module(vs)
-            .name(MAIN),
-        fs_stage,
+            .stage(flags)
+            .module(module)
+            .name(MAIN)
+            .specialization_info(&spec)
+    };
+    let stages = [
+        stage(vk::ShaderStageFlags::VERTEX, vs),
+        stage(vk::ShaderStageFlags::FRAGMENT, fs),
     ];
     let vb = [vk::VertexInputBindingDescription::default()
         .binding(0)

@@ -33,7 +33,7 @@ pub struct Images {
     pub attr_leaf: Image,
     /// Cone-filter tables (R32, one m×m layer per used class).
     pub filter: Image,
-    /// Direct incident radiance (1×1 placeholder until set).
+    /// Direct incident radiance (zero until set; 1×1 placeholder for scenes without lights).
     pub direct: Image,
     /// Lobe factors per glossy leaf and incident bin (1×1 placeholder without glossy leaves).
     pub lobe_norm: Image,
@@ -95,6 +95,41 @@ pub struct MemoryReport {
     pub push_pull_primitives: u64,
     /// Sum.
     pub total: u64,
+}
+
+impl MemoryReport {
+    /// A report of these parts and their total.
+    pub fn sum(
+        tables: u64,
+        links: u64,
+        filter_tables: u64,
+        element_attributes: u64,
+        push_pull_primitives: u64,
+    ) -> Self {
+        Self {
+            tables,
+            links,
+            filter_tables,
+            element_attributes,
+            push_pull_primitives,
+            total: tables + links + filter_tables + element_attributes + push_pull_primitives,
+        }
+    }
+
+    /// The parts by name (the `memory_bytes` of `info` and `profile`).
+    pub fn by_name(&self) -> std::collections::BTreeMap<String, u64> {
+        [
+            ("tables", self.tables),
+            ("links", self.links),
+            ("filter_tables", self.filter_tables),
+            ("element_attributes", self.element_attributes),
+            ("push_pull_primitives", self.push_pull_primitives),
+            ("total", self.total),
+        ]
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v))
+        .collect()
+    }
 }
 
 /// All GPU resources of one solver.
@@ -182,6 +217,7 @@ impl Resources {
         precision: Precision,
         accum_format: vk::Format,
         column_height: u32,
+        features: &crate::plan::Features,
     ) -> Result<Self> {
         let m = sys.bins.count as u32;
         let layout = TableLayout::with_column_height(
@@ -191,7 +227,7 @@ impl Resources {
             column_height,
         )?;
         let format = table_format(precision);
-        let draw = DrawData::new(sys, &layout);
+        let draw = DrawData::new(sys, &layout, features.glossy_everywhere);
         let (tw, th) = (layout.width(), layout.rows_per_column);
         let (rw, rh) = (layout.columns, layout.rows_per_column);
         let f32x4 = vk::Format::R32G32B32A32_SFLOAT;
@@ -216,8 +252,15 @@ impl Resources {
                 m * layers,
                 vk::Format::R32_SFLOAT,
             )?,
-            direct: ctx.create_image("direct light (none)", 1, 1, format)?,
-            lobe_norm: if sys.lobe_norm.is_empty() {
+            // Without lights the shaders never read it (specialized away): a 1×1 placeholder.
+            direct: if features.direct {
+                table("direct light")?
+            } else {
+                ctx.create_image("direct light (none)", 1, 1, format)?
+            },
+            lobe_norm: if !features.glossy
+                || (sys.lobe_norm.is_empty() && !features.glossy_everywhere)
+            {
                 ctx.create_image("lobe factors (none)", 1, 1, vk::Format::R32_SFLOAT)?
             } else {
                 ctx.create_image("lobe factors", tw, th, vk::Format::R32_SFLOAT)?
@@ -257,7 +300,11 @@ impl Resources {
             }
         }
         ctx.upload_image(&mut images.filter, as_bytes(&ft))?;
-        let zero = encode(format, &[[0.0; 4]]);
+        let d = &images.direct;
+        let zero = encode(
+            format,
+            &vec![[0.0; 4]; (d.extent.width * d.extent.height) as usize],
+        );
         ctx.upload_image(&mut images.direct, &zero)?;
         let vb = vk::BufferUsageFlags::VERTEX_BUFFER;
         let sb = vk::BufferUsageFlags::STORAGE_BUFFER;
@@ -394,6 +441,55 @@ impl Resources {
         unsafe { ctx.device.update_descriptor_sets(&writes, &[]) };
     }
 
+    /// The memory [`Resources::new`] would allocate for `sys` with `features` at `precision`,
+    /// without a device (for `info`), assuming L_in/L_push in the table format and images up to
+    /// `max_image_dimension` texels.
+    pub fn planned_memory(
+        sys: &System,
+        features: &crate::plan::Features,
+        precision: Precision,
+        max_image_dimension: u32,
+    ) -> Result<MemoryReport> {
+        let m = sys.bins.count as u32;
+        let layout =
+            TableLayout::with_column_height(sys.rows() as u32, m, max_image_dimension, u32::MAX)?;
+        let draw = DrawData::new(sys, &layout, features.glossy_everywhere);
+        let texel = Image::texel_bytes(table_format(precision));
+        let table = layout.width() as u64 * layout.rows_per_column as u64;
+        let rows = layout.columns as u64 * layout.rows_per_column as u64;
+        let glossy_tables =
+            features.glossy && (!sys.lobe_norm.is_empty() || features.glossy_everywhere);
+        let tables = table * (5 * texel + 16)
+            + if features.direct {
+                table * texel
+            } else {
+                texel
+            }
+            + if glossy_tables { table * 4 } else { 4 };
+        let layers = sys.filters.used_classes().len().max(1) as u64;
+        let size = |n: usize, t: usize| (n * t) as u64;
+        let quad = std::mem::size_of::<super::layout::QuadInstance>();
+        Ok(MemoryReport::sum(
+            tables,
+            size(
+                draw.links.len(),
+                std::mem::size_of::<super::layout::GpuLink>(),
+            ),
+            m as u64 * m as u64 * layers * 4,
+            rows * (2 * texel + 32)
+                + size(sys.materials.len(), std::mem::size_of::<GpuMaterial>())
+                + m as u64 * 16,
+            size(draw.push_quads.len(), quad)
+                + size(draw.diffuse_quads.len(), quad)
+                + size(draw.glossy_quads.len(), quad)
+                + size(draw.leaf_quads.len(), quad)
+                + size(
+                    draw.pull_lines.len(),
+                    std::mem::size_of::<super::layout::PullLine>(),
+                ),
+        ))
+    }
+
     /// GPU memory by purpose.
     pub fn memory(&self) -> MemoryReport {
         let im = &self.images;
@@ -417,22 +513,7 @@ impl Resources {
             + b.glossy_quads.size
             + b.leaf_quads.size
             + b.pull_lines.size;
-        let r = MemoryReport {
-            tables,
-            links: b.links.size,
-            filter_tables: im.filter.bytes(),
-            element_attributes: attrs,
-            push_pull_primitives: prims,
-            total: 0,
-        };
-        MemoryReport {
-            total: r.tables
-                + r.links
-                + r.filter_tables
-                + r.element_attributes
-                + r.push_pull_primitives,
-            ..r
-        }
+        MemoryReport::sum(tables, b.links.size, im.filter.bytes(), attrs, prims)
     }
 
     /// Frees everything.

@@ -16,14 +16,7 @@ pub const SOURCES: &[(&str, &str)] = &[
         "local_irradiance.frag",
         include_str!("../../glsl/local_irradiance.frag"),
     ),
-    (
-        "local_diffuse.frag",
-        include_str!("../../glsl/local_diffuse.frag"),
-    ),
-    (
-        "local_glossy.frag",
-        include_str!("../../glsl/local_glossy.frag"),
-    ),
+    ("local.frag", include_str!("../../glsl/local.frag")),
     ("pull.vert", include_str!("../../glsl/pull.vert")),
     ("pull.frag", include_str!("../../glsl/pull.frag")),
     ("coverage.frag", include_str!("../../glsl/coverage.frag")),

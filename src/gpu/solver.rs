@@ -3,14 +3,15 @@
 
 use super::context::Context;
 use super::diagnostics::BlendRounding;
-use super::layout::{mode, PassConstants, FLAG_DIRECT, FLAG_HALF};
+use super::layout::{mode, PassConstants, FLAG_HALF};
 use super::memory::Image;
 use super::passes::{self, Pass, Pipelines};
 use super::pipelines::Layouts;
 use super::profiler::Profiler;
 use super::range::Range;
 use super::resources::{decode, encode, Images, MemoryReport, Resources};
-use crate::error::Result;
+use crate::error::{Error, Result};
+use crate::plan::Features;
 use crate::scene::{Precision, Scheme};
 use crate::solver::{LocalMode, Table};
 use crate::system::System;
@@ -29,6 +30,9 @@ pub struct GpuOptions {
     /// Accumulate L_in and L_push in the table format even where the device truncates
     /// float16 blending (by default such devices accumulate in float32; see [`GpuSolver::fallbacks`]).
     pub force_table_accumulation: bool,
+    /// What to compute and allocate (a scene's [`crate::plan::Plan`]); `None`:
+    /// [`Features::for_system`] (the system's local passes, antiradiance and every source on).
+    pub features: Option<Features>,
 }
 
 impl Default for GpuOptions {
@@ -37,6 +41,7 @@ impl Default for GpuOptions {
             precision: Precision::F16,
             column_height: None,
             force_table_accumulation: false,
+            features: None,
         }
     }
 }
@@ -84,12 +89,14 @@ pub struct GpuSolver {
     environment: DVec3,
     direct: Option<Table>,
     scale: f64,
+    features: Features,
 }
 
 impl GpuSolver {
     /// Creates every image, buffer and pipeline `sys` needs and uploads the links and tables.
     pub fn new(ctx: Arc<Context>, sys: &System, opts: GpuOptions) -> Result<Self> {
         let format = super::resources::table_format(opts.precision);
+        let features = opts.features.unwrap_or_else(|| Features::for_system(sys));
         let mut fallbacks = Vec::new();
         let accum_format = if opts.precision == Precision::F16
             && !opts.force_table_accumulation
@@ -109,10 +116,17 @@ impl GpuSolver {
             opts.precision,
             accum_format,
             opts.column_height.unwrap_or(u32::MAX),
+            &features,
         )?;
         let layouts = Layouts::new(&ctx)?;
         res.write_sets(&ctx, layouts.set)?;
-        let pipes = Pipelines::new(&ctx, layouts.pipeline, res.format, res.accum_format)?;
+        let pipes = Pipelines::new(
+            &ctx,
+            layouts.pipeline,
+            res.format,
+            res.accum_format,
+            features,
+        )?;
         let profiler = Profiler::new(&ctx, 1024)?;
         let constants = PassConstants {
             bins: res.layout.bins,
@@ -141,6 +155,7 @@ impl GpuSolver {
             environment: DVec3::ZERO,
             direct: None,
             scale: 1.0,
+            features,
         })
         .and_then(|mut s| {
             s.update_scale()?;
@@ -158,8 +173,18 @@ impl GpuSolver {
         &self.ctx
     }
 
+    /// What this solver computes and allocates.
+    pub fn features(&self) -> &Features {
+        &self.features
+    }
+
     /// Constant environment radiance (creates antiradiance, like the CPU solver).
     pub fn set_environment(&mut self, radiance: DVec3) -> Result<()> {
+        if radiance != DVec3::ZERO && !self.features.environment {
+            return Err(Error::Invalid(
+                "an environment was set on a solver planned without one".into(),
+            ));
+        }
         self.environment = radiance;
         self.update_scale()
     }
@@ -167,6 +192,11 @@ impl GpuSolver {
     /// Direct incident radiance per node and bin (reflected only), e.g. from
     /// [`crate::solver::CpuSolver::direct_in`].
     pub fn set_direct(&mut self, table: &Table) -> Result<()> {
+        if !self.features.direct {
+            return Err(Error::Invalid(
+                "direct light was set on a solver planned without lights".into(),
+            ));
+        }
         self.direct = Some(table.clone());
         let before = self.scale;
         self.update_scale()?;
@@ -212,7 +242,6 @@ impl GpuSolver {
         self.ctx.destroy_image(&mut old);
         self.res.update_set(&self.ctx, 0);
         self.res.update_set(&self.ctx, 1);
-        self.constants.flags |= FLAG_DIRECT;
         Ok(())
     }
 
@@ -339,7 +368,13 @@ impl GpuSolver {
             Scheme::Symmetric => self.record_propagation(cmd, LocalMode::Both),
             Scheme::Asymmetric => {
                 self.record_propagation(cmd, LocalMode::Reflect)?;
-                for _ in 0..antiradiance_steps {
+                // Without antiradiance its steps would change nothing (as in the CPU solver).
+                let steps = if self.features.antiradiance {
+                    antiradiance_steps
+                } else {
+                    0
+                };
+                for _ in 0..steps {
                     self.record_propagation(cmd, LocalMode::Antiradiance)?;
                 }
                 Ok(())

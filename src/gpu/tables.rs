@@ -138,7 +138,8 @@ pub struct DrawData {
 
 impl DrawData {
     /// Builds the draw data of `sys` in `layout`.
-    pub fn new(sys: &System, layout: &TableLayout) -> Self {
+    /// `glossy_everywhere` sends every leaf through the general BRDF pass (`--all-passes`).
+    pub fn new(sys: &System, layout: &TableLayout, glossy_everywhere: bool) -> Self {
         let classes = sys.filters.rows.len();
         let mut class_layer = vec![u16::MAX; classes];
         for (layer, c) in sys.filters.used_classes().into_iter().enumerate() {
@@ -214,7 +215,8 @@ impl DrawData {
         let glossy_leaf = |r: u32| {
             let slot = sys.leaf_slot[r as usize];
             slot != u32::MAX
-                && sys.materials[sys.leaves[slot as usize].material as usize].is_glossy()
+                && (glossy_everywhere
+                    || sys.materials[sys.leaves[slot as usize].material as usize].is_glossy())
         };
         let diffuse_quads = runs(&|r| sys.leaf_slot[r as usize] != u32::MAX && !glossy_leaf(r));
         let glossy_quads = runs(&glossy_leaf);

@@ -116,6 +116,7 @@ impl Iterative for Gpu<'_> {
             self.sys,
             GpuOptions {
                 precision: Precision::F32,
+                features: Some(*self.solver.features()),
                 ..Default::default()
             },
         )?;

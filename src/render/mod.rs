@@ -43,6 +43,12 @@ pub struct RenderOptions {
     pub device: Option<String>,
     /// Enable the Vulkan validation layer (tests).
     pub validation: bool,
+    /// Run every pass and create every table whether the scene needs it or not, with float32
+    /// tables (`--all-passes`: the reference the scene-adaptive plan is checked against).
+    pub all_passes: bool,
+    /// Choose bins, element size and iterations for this relative RMSE from the measured
+    /// error-vs-time data ([`crate::plan::target`]), replacing the scene's.
+    pub target_error: Option<f64>,
 }
 
 impl Default for RenderOptions {
@@ -53,6 +59,8 @@ impl Default for RenderOptions {
             shadow_map_size: 1024,
             device: None,
             validation: false,
+            all_passes: false,
+            target_error: None,
         }
     }
 }
@@ -99,8 +107,16 @@ pub struct RenderStats {
     pub width: u32,
     /// Image height.
     pub height: u32,
-    /// Milliseconds per pass, summed over the render (GPU timestamps for GPU passes).
-    pub passes: BTreeMap<String, f64>,
+    /// The passes the scene's plan runs, in order (names in the README, "Passes a scene needs").
+    pub passes: Vec<String>,
+    /// What the scene analysis decided and why, one sentence per rule.
+    pub decisions: Vec<String>,
+    /// True when `--all-passes` forced every pass on.
+    pub all_passes: bool,
+    /// The setting `--target-error` chose, if given.
+    pub target: Option<crate::plan::target::TargetChoice>,
+    /// Milliseconds per timed scope, summed over the render (GPU timestamps for GPU passes).
+    pub pass_ms: BTreeMap<String, f64>,
     /// Meshing + linking time (ms).
     pub linking_ms: f64,
     /// Wall time of the whole render (ms).
@@ -211,6 +227,19 @@ fn run(
     each: &mut dyn FnMut(IterationFrame) -> Result<()>,
 ) -> Result<(RenderStats, Table)> {
     let t0 = Instant::now();
+    let target = opts
+        .target_error
+        .map(|e| crate::plan::target::choose(scene, e));
+    let targeted;
+    let scene = match &target {
+        Some(choice) => {
+            let mut s = scene.clone();
+            crate::plan::target::apply(&mut s, choice);
+            targeted = s;
+            &targeted
+        }
+        None => scene,
+    };
     // The device comes first: its memory bounds the discretization before linking.
     let ctx = match (opts.backend, &opts.context) {
         (Backend::Cpu, _) => None,
@@ -226,6 +255,7 @@ fn run(
     let sys = System::build_within(scene, ctx.as_ref().map(|c| c.info.device_local_bytes))?;
     progress.end();
     let surfaces = Surfaces::new(scene, &sys);
+    let plan = crate::plan::Plan::new(scene, &sys, &surfaces, opts.all_passes);
     let mut maps = ShadowMaps::new(scene, opts.shadow_map_size);
     // All views share one image of side × (side · views) texels; keep it within 16384 rows.
     let views = maps.views.len().max(1) as u32;
@@ -250,7 +280,11 @@ fn run(
         precision: String::new(),
         width: scene.camera.width,
         height: scene.camera.height,
-        passes: BTreeMap::new(),
+        passes: plan.passes(),
+        decisions: plan.decisions.clone(),
+        all_passes: plan.all_passes,
+        target,
+        pass_ms: BTreeMap::new(),
         linking_ms: sys.meshing_ms + sys.links.linking_ms,
         total_ms: 0.0,
         residuals: Vec::new(),
@@ -293,6 +327,7 @@ fn run(
             passes.insert("shadow".to_string(), ms(t));
             let t = Instant::now();
             let mut solver = CpuSolver::new(&sys);
+            solver.antiradiance = plan.features.antiradiance;
             solver.set_environment(scene.environment);
             if !scene.lights.is_empty() {
                 solver.direct_in = Some(direct_in_table(&sys, &scene.lights, &maps));
@@ -321,21 +356,26 @@ fn run(
         Backend::Gpu => {
             let ctx = ctx.clone().expect("created above for the GPU backend");
             stats.device = ctx.info.name.clone();
-            let (precision, why) = crate::gpu::range::Range::of(&sys, scene.environment, 0.0)
-                .precision(scene.solver.precision);
-            stats.fallbacks.extend(why);
+            stats.fallbacks.extend(plan.precision_fallback.clone());
             let mut solver = crate::gpu::GpuSolver::new(
                 ctx.clone(),
                 &sys,
                 crate::gpu::GpuOptions {
-                    precision,
+                    precision: plan.precision,
+                    features: Some(plan.features),
                     ..Default::default()
                 },
             )?;
             stats.fallbacks.extend(solver.fallbacks().iter().cloned());
             solver.set_environment(scene.environment)?;
-            let mut frame =
-                crate::gpu::frame::GpuFrame::new(ctx.clone(), scene, &sys, &surfaces, &maps)?;
+            let mut frame = crate::gpu::frame::GpuFrame::new(
+                ctx.clone(),
+                scene,
+                &sys,
+                &surfaces,
+                &maps,
+                &plan.features,
+            )?;
             let mut direct = None;
             if !maps.views.is_empty() {
                 progress.begin("shadow maps", 1);
@@ -385,7 +425,7 @@ fn run(
     stats.estimated_error = outcome.estimated_error;
     stats.fallbacks.extend(outcome.fallbacks);
     stats.warnings.extend(outcome.warnings);
-    stats.passes = passes;
+    stats.pass_ms = passes;
     stats.total_ms = ms(t0);
     if last.is_none() {
         return Err(Error::Numerical("no frame was drawn".into()));

@@ -132,7 +132,8 @@ pub enum Scheme {
 }
 
 /// Storage precision of the GPU tables.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Precision {
     /// R16G16B16A16_SFLOAT (the paper's float16).
     F16,

@@ -14,6 +14,8 @@ pub fn local(s: &mut CpuSolver<'_>, mode: LocalMode) {
     let m = sys.bins.count;
     let w = sys.bins.omega;
     let (l_push, direct, env) = (&s.l_push, s.direct_in.as_ref(), s.environment);
+    // Without antiradiance (nothing can occlude) the back bins stay zero.
+    let antiradiance = s.antiradiance;
     s.i_ex
         .data
         .par_chunks_mut(m)
@@ -77,7 +79,11 @@ pub fn local(s: &mut CpuSolver<'_>, mode: LocalMode) {
                         continue;
                     }
                     tot[j] = DVec3::ZERO;
-                    ex[j] = -(a * c * -cj) * lt(j);
+                    ex[j] = if antiradiance {
+                        -(a * c * -cj) * lt(j)
+                    } else {
+                        DVec3::ZERO
+                    };
                 } else {
                     tot[j] = DVec3::ZERO;
                     ex[j] = DVec3::ZERO;

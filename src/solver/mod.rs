@@ -85,6 +85,9 @@ pub struct CpuSolver<'a> {
     pub energies: Vec<f64>,
     /// Global passes run so far.
     pub propagations: usize,
+    /// Whether antiradiance is computed ([`crate::plan::Features::antiradiance`]): off, the
+    /// back bins stay zero and the asymmetric scheme runs only its reflection step.
+    pub antiradiance: bool,
 }
 
 impl<'a> CpuSolver<'a> {
@@ -103,6 +106,7 @@ impl<'a> CpuSolver<'a> {
             residuals: Vec::new(),
             energies: Vec::new(),
             propagations: 0,
+            antiradiance: true,
         }
     }
 
@@ -153,7 +157,12 @@ impl<'a> CpuSolver<'a> {
             Scheme::Symmetric => self.propagate(LocalMode::Both),
             Scheme::Asymmetric => {
                 self.propagate(LocalMode::Reflect);
-                for _ in 0..antiradiance_steps {
+                let steps = if self.antiradiance {
+                    antiradiance_steps
+                } else {
+                    0
+                };
+                for _ in 0..steps {
                     self.propagate(LocalMode::Antiradiance);
                 }
             }

@@ -8,7 +8,9 @@ use crate::gpu::frame::FrameImages;
 use crate::gpu::layout::FrameConstants;
 use ash::vk;
 
-/// Records the G-buffer pass.
+/// Records the G-buffer pass; the vertex-radiance target exists only when `vertex` (smooth
+/// meshes are interpolated).
+#[allow(clippy::too_many_arguments)]
 pub fn record(
     p: &FramePass<'_>,
     pipeline: vk::Pipeline,
@@ -16,34 +18,33 @@ pub fn record(
     corners: vk::Buffer,
     corner_count: u32,
     constants: FrameConstants,
+    vertex: bool,
 ) {
-    transition(
-        p.ctx,
-        p.cmd,
-        &mut [
-            (&mut im.gbuf_position, Access::Attachment),
-            (&mut im.gbuf_vertex, Access::Attachment),
-            (&mut im.gbuf_depth, Access::Depth),
-        ],
-    );
+    let mut colors = vec![&mut im.gbuf_position];
+    if vertex {
+        colors.push(&mut im.gbuf_vertex);
+    }
+    let mut to_attachment: Vec<_> = colors
+        .into_iter()
+        .map(|img| (img, Access::Attachment))
+        .collect();
+    transition(p.ctx, p.cmd, &mut to_attachment);
+    transition(p.ctx, p.cmd, &mut [(&mut im.gbuf_depth, Access::Depth)]);
+    let attachments: Vec<_> = to_attachment
+        .iter()
+        .map(|(img, _)| (&**img, Load::Clear))
+        .collect();
     begin_rendering_with_depth(
         p.ctx,
         p.cmd,
-        &[
-            (&im.gbuf_position, Load::Clear),
-            (&im.gbuf_vertex, Load::Clear),
-        ],
+        &attachments,
         Some((&im.gbuf_depth, Load::Clear)),
     );
     p.bind(pipeline, &constants);
     p.draw(corners, corner_count, 1);
     end_rendering(p.ctx, p.cmd);
-    transition(
-        p.ctx,
-        p.cmd,
-        &mut [
-            (&mut im.gbuf_position, Access::Sampled),
-            (&mut im.gbuf_vertex, Access::Sampled),
-        ],
-    );
+    for t in to_attachment.iter_mut() {
+        t.1 = Access::Sampled;
+    }
+    transition(p.ctx, p.cmd, &mut to_attachment);
 }

@@ -12,7 +12,7 @@ pub mod shadow;
 pub mod splat;
 
 use super::context::Context;
-use super::layout::{mode, FrameConstants, PassConstants, PullLine, QuadInstance};
+use super::layout::{mode, spec, FrameConstants, PassConstants, PullLine, QuadInstance};
 use super::memory::Image;
 use super::pipelines::{create, PipelineDesc, Target};
 use super::resources::Resources;
@@ -45,6 +45,7 @@ pub struct Pipelines {
     /// Pull lines, additive into the cluster image.
     pub pull: vk::Pipeline,
     format: vk::Format,
+    features: crate::plan::Features,
 }
 
 const UINT4: vk::Format = vk::Format::R32G32B32A32_UINT;
@@ -56,6 +57,7 @@ impl Pipelines {
         layout: vk::PipelineLayout,
         format: vk::Format,
         accum_format: vk::Format,
+        features: crate::plan::Features,
     ) -> Result<Self> {
         let accumulate = [Target {
             format: accum_format,
@@ -74,7 +76,7 @@ impl Pipelines {
                 stride: std::mem::size_of::<super::layout::GpuLink>() as u32,
                 attributes: &[(UINT4, 0), (vk::Format::R32_SFLOAT, 16)],
                 targets: &accumulate,
-                mode: None,
+                specialization: &[],
                 per_vertex: false,
                 depth: false,
             },
@@ -90,7 +92,7 @@ impl Pipelines {
                 stride: std::mem::size_of::<QuadInstance>() as u32,
                 attributes: &quad,
                 targets: &accumulate,
-                mode: None,
+                specialization: &[],
                 per_vertex: false,
                 depth: false,
             },
@@ -111,7 +113,7 @@ impl Pipelines {
                 stride: std::mem::size_of::<QuadInstance>() as u32,
                 attributes: &quad,
                 targets: &[put, put],
-                mode: None,
+                specialization: &spec::values(&features, mode::BOTH, false),
                 per_vertex: false,
                 depth: false,
             },
@@ -131,7 +133,7 @@ impl Pipelines {
                     additive: true,
                     write: true,
                 }],
-                mode: None,
+                specialization: &[],
                 per_vertex: false,
                 depth: false,
             },
@@ -144,6 +146,7 @@ impl Pipelines {
             glossy: [None; 3],
             pull,
             format,
+            features,
         })
     }
 
@@ -171,6 +174,7 @@ impl Pipelines {
         ];
         let quad = [(vk::Format::R32G32B32_UINT, 0)];
         let names = ["both", "reflect", "antiradiance"];
+        let features = self.features;
         for (glossy, slot) in [
             (false, &mut self.diffuse[m as usize]),
             (true, &mut self.glossy[m as usize]),
@@ -191,16 +195,12 @@ impl Pipelines {
                 &PipelineDesc {
                     name: &name,
                     vert: "quad.vert",
-                    frag: if glossy {
-                        "local_glossy.frag"
-                    } else {
-                        "local_diffuse.frag"
-                    },
+                    frag: "local.frag",
                     topology: vk::PrimitiveTopology::TRIANGLE_STRIP,
                     stride: std::mem::size_of::<QuadInstance>() as u32,
                     attributes: &quad,
                     targets: &targets,
-                    mode: Some(m),
+                    specialization: &spec::values(&features, m, glossy),
                     per_vertex: false,
                     depth: false,
                 },

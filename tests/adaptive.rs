@@ -1,0 +1,458 @@
+//! The scene-adaptive pipeline (src/plan): for every rule, a scene where it applies
+//! (tests/adaptive/*.toml): the pass list leaves out what the scene does not need, the image
+//! equals the `--all-passes` image (every pass on, float32 tables) within float16 tolerance, and
+//! what was left out was not allocated. GPU on lavapipe with validation on; the CPU solver (the
+//! specification) is held to the same rules.
+
+mod common;
+
+use antiradiance::frame::Image;
+use antiradiance::info::Info;
+use antiradiance::metrics::relative_errors;
+use antiradiance::plan::{Features, Plan};
+use antiradiance::render::{render, Backend, RenderOptions, Rendered, Silent};
+use antiradiance::scene::{load_scene, Precision, Scene, Scheme};
+use antiradiance::{CpuSolver, System};
+use common::context;
+use std::path::Path;
+
+fn scene(name: &str) -> Scene {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/adaptive");
+    load_scene(&dir.join(name)).expect(name)
+}
+
+fn run(s: &Scene, backend: Backend, all_passes: bool) -> Rendered {
+    let ctx = context();
+    let opts = RenderOptions {
+        context: Some(ctx.clone()),
+        backend,
+        shadow_map_size: 256,
+        all_passes,
+        ..Default::default()
+    };
+    let r = render(s, &opts, &Silent).expect("render");
+    let msgs = ctx.validation_messages();
+    assert!(msgs.is_empty(), "validation errors:\n{}", msgs.join("\n"));
+    r
+}
+
+/// Largest pixel difference relative to the image's brightest pixel, and the relative RMSE.
+fn difference(a: &Image, b: &Image) -> (f64, f64) {
+    let peak = b
+        .pixels
+        .iter()
+        .flatten()
+        .fold(0.0f64, |m, &v| m.max(v.abs() as f64));
+    let worst = a
+        .pixels
+        .iter()
+        .flatten()
+        .zip(b.pixels.iter().flatten())
+        .fold(0.0f64, |m, (&x, &y)| m.max((x - y).abs() as f64));
+    (worst / peak, relative_errors(a, b).unwrap().0)
+}
+
+/// Every pass `--all-passes` runs, in its order, for a scene with these light types.
+fn everything(shadows: &[&str]) -> Vec<String> {
+    let mut p: Vec<String> = shadows.iter().map(|k| format!("shadow_{k}")).collect();
+    // The direct-light table exists (zero without lights) and is reflected.
+    p.extend(
+        [
+            "direct_init",
+            "emission_init",
+            "environment_init",
+            "global",
+            "push",
+            "local_irradiance",
+            "local_glossy",
+            "antiradiance",
+            "pull",
+            "gbuffer",
+            "interpolate",
+            "splat",
+            "compose",
+        ]
+        .map(String::from),
+    );
+    p
+}
+
+struct Rule {
+    scene: &'static str,
+    /// The plan's passes, exactly.
+    passes: &'static [&'static str],
+    shadows: &'static [&'static str],
+    precision: Precision,
+}
+
+const RULES: &[Rule] = &[
+    // No antiradiance in one convex enclosure; no BRDF tables without glossy materials; no shadow,
+    // direct or environment passes; splatting only.
+    Rule {
+        scene: "convex-room.toml",
+        passes: &[
+            "emission_init",
+            "global",
+            "push",
+            "local_irradiance",
+            "local_diffuse",
+            "pull",
+            "gbuffer",
+            "splat",
+            "compose",
+        ],
+        shadows: &[],
+        precision: Precision::F16,
+    },
+    // The control: a block occludes, antiradiance stays.
+    Rule {
+        scene: "occluded-room.toml",
+        passes: &[
+            "emission_init",
+            "global",
+            "push",
+            "local_irradiance",
+            "local_diffuse",
+            "antiradiance",
+            "pull",
+            "gbuffer",
+            "splat",
+            "compose",
+        ],
+        shadows: &[],
+        precision: Precision::F16,
+    },
+    // The general BRDF pass only for the glossy wall, the fast path for the rest.
+    Rule {
+        scene: "glossy-room.toml",
+        passes: &[
+            "emission_init",
+            "global",
+            "push",
+            "local_irradiance",
+            "local_diffuse",
+            "local_glossy",
+            "antiradiance",
+            "pull",
+            "gbuffer",
+            "splat",
+            "compose",
+        ],
+        shadows: &[],
+        precision: Precision::F16,
+    },
+    // A smooth sphere alone under a point light: vertex interpolation only, point shadows only,
+    // no emission, no environment, a convex solid (no antiradiance).
+    Rule {
+        scene: "sphere.toml",
+        passes: &[
+            "shadow_point",
+            "direct_init",
+            "global",
+            "push",
+            "local_irradiance",
+            "local_diffuse",
+            "pull",
+            "gbuffer",
+            "interpolate",
+            "compose",
+        ],
+        shadows: &["point"],
+        precision: Precision::F16,
+    },
+    // A floor under a spot: spot shadows only, splatting only.
+    Rule {
+        scene: "spot-floor.toml",
+        passes: &[
+            "shadow_spot",
+            "direct_init",
+            "global",
+            "push",
+            "local_irradiance",
+            "local_diffuse",
+            "pull",
+            "gbuffer",
+            "splat",
+            "compose",
+        ],
+        shadows: &["spot"],
+        precision: Precision::F16,
+    },
+    // Environment and a directional light: environment initialization, directional shadows,
+    // both shading kinds (floor splatted, sphere interpolated), antiradiance (the sphere occludes).
+    Rule {
+        scene: "environment.toml",
+        passes: &[
+            "shadow_directional",
+            "direct_init",
+            "environment_init",
+            "global",
+            "push",
+            "local_irradiance",
+            "local_diffuse",
+            "antiradiance",
+            "pull",
+            "gbuffer",
+            "interpolate",
+            "splat",
+            "compose",
+        ],
+        shadows: &["directional"],
+        precision: Precision::F16,
+    },
+    // Albedo 0.97: float32 tables by the range analysis, like --all-passes.
+    Rule {
+        scene: "bright-room.toml",
+        passes: &[
+            "emission_init",
+            "global",
+            "push",
+            "local_irradiance",
+            "local_diffuse",
+            "pull",
+            "gbuffer",
+            "splat",
+            "compose",
+        ],
+        shadows: &[],
+        precision: Precision::F32,
+    },
+];
+
+#[test]
+fn every_rule_leaves_out_only_what_cannot_change_the_image() {
+    for rule in RULES {
+        let s = scene(rule.scene);
+        let plan = run(&s, Backend::Gpu, false);
+        let all = run(&s, Backend::Gpu, true);
+        assert_eq!(plan.stats.passes, rule.passes, "{}", rule.scene);
+        assert_eq!(all.stats.passes, everything(rule.shadows), "{}", rule.scene);
+        let want = match rule.precision {
+            Precision::F16 => "f16",
+            Precision::F32 => "f32",
+        };
+        assert_eq!(plan.stats.precision, want, "{}", rule.scene);
+        assert_eq!(all.stats.precision, "f32", "{}", rule.scene);
+        let (worst, rmse) = difference(&plan.image, &all.image);
+        println!(
+            "{}: plan vs --all-passes: worst pixel {worst:.2e} of the peak, relative RMSE {rmse:.2e}; GPU time {:.0} vs {:.0} ms",
+            rule.scene,
+            plan.stats.pass_ms.values().sum::<f64>(),
+            all.stats.pass_ms.values().sum::<f64>()
+        );
+        // float16 tables against float32 ones (the GPU-vs-CPU tolerance of tests/gpu.rs).
+        assert!(
+            worst < 5e-3 && rmse < 1e-2,
+            "{}: plan differs from --all-passes: worst {worst:.2e}, relative RMSE {rmse:.2e}",
+            rule.scene
+        );
+    }
+}
+
+/// The CPU solver (the specification) follows the same plan: without antiradiance the convex room
+/// gives the same leaves' radiosity as with it, and the asymmetric scheme's antiradiance steps
+/// (skipped by the plan) change nothing.
+#[test]
+fn convex_room_without_antiradiance_is_the_same_system() {
+    let s = scene("convex-room.toml");
+    let sys = System::build(&s).unwrap();
+    let solve = |antiradiance: bool, scheme: Scheme| {
+        let mut c = CpuSolver::new(&sys);
+        c.antiradiance = antiradiance;
+        c.solve(scheme, 6, 4);
+        (0..sys.leaves.len())
+            .map(|l| c.radiosity(l))
+            .collect::<Vec<_>>()
+    };
+    let with = solve(true, Scheme::Symmetric);
+    for scheme in [Scheme::Symmetric, Scheme::Asymmetric] {
+        let without = solve(false, scheme);
+        let worst = with
+            .iter()
+            .zip(&without)
+            .map(|(a, b)| ((*a - *b).abs() / a.abs().max(glam::DVec3::splat(1e-9))).max_element())
+            .fold(0.0, f64::max);
+        println!("convex room, {scheme:?} without antiradiance: worst leaf {worst:.2e}");
+        assert!(worst < 1e-9, "{scheme:?}: {worst:.2e}");
+    }
+}
+
+/// With cluster links (τ = 1) the discrete system carries some antiradiance even in a convex
+/// enclosure: a cluster's I_ex in a bin sums its leaves' radiance and, for leaves whose back faces
+/// that bin, their antiradiance, which reaches receivers that lie in front of those leaves. The
+/// plan (no antiradiance) drops that leak, so here it differs from `--all-passes` by more than
+/// float tolerance, and is closer to the exact answer Le/(1−ρ).
+#[test]
+fn convex_enclosure_with_cluster_links_is_closer_to_the_exact_answer_without_antiradiance() {
+    let (rho, le) = (0.7, 1.0);
+    let mut s = Scene::empty();
+    let m = s.add_material(antiradiance::scene::Material {
+        ke: glam::DVec3::splat(le),
+        ..antiradiance::scene::Material::diffuse("uniform", rho)
+    });
+    common::add_box(
+        &mut s,
+        "room",
+        glam::DVec3::ZERO,
+        glam::DVec3::splat(2.0),
+        m,
+        true,
+    );
+    s.solver.bins = 64;
+    s.solver.element_size = 0.25;
+    s.solver.oracle = 1.0;
+    let sys = System::build(&s).unwrap();
+    let surf = antiradiance::frame::surfaces::Surfaces::new(&s, &sys);
+    assert!(!Plan::analyze(&s, &sys, &surf).features.antiradiance);
+    let want = le / (1.0 - rho);
+    let error = |antiradiance: bool| {
+        let mut c = CpuSolver::new(&sys);
+        c.antiradiance = antiradiance;
+        c.solve(Scheme::Symmetric, 40, 4);
+        let n = sys.leaves.len() as f64;
+        (0..sys.leaves.len())
+            .map(|l| (c.radiosity(l).x / std::f64::consts::PI - want).abs() / want)
+            .sum::<f64>()
+            / n
+    };
+    let (plan, all) = (error(false), error(true));
+    println!(
+        "uniform room, τ = 1, 64 bins: mean error without antiradiance {plan:.4}, with {all:.4}"
+    );
+    assert!(plan < all, "{plan} vs {all}");
+}
+
+/// What the plan leaves out is not allocated: `info`'s memory (tables, frame images) and the
+/// GPU solver's own report are smaller than with every pass on, and the planned figure is what
+/// the device allocated.
+#[test]
+fn memory_follows_the_plan() {
+    let ctx = context();
+    for name in ["convex-room.toml", "sphere.toml", "spot-floor.toml"] {
+        let s = scene(name);
+        let sys = System::build(&s).unwrap();
+        let plan = Info::of(&s, &sys, false).unwrap();
+        let all = Info::of(&s, &sys, true).unwrap();
+        for k in ["tables", "frame_images"] {
+            assert!(
+                plan.memory_bytes[k] < all.memory_bytes[k],
+                "{name} {k}: {} vs {}",
+                plan.memory_bytes[k],
+                all.memory_bytes[k]
+            );
+        }
+        let surf = antiradiance::frame::surfaces::Surfaces::new(&s, &sys);
+        for p in [
+            Plan::analyze(&s, &sys, &surf),
+            Plan::everything(&s, &sys, &surf),
+        ] {
+            let gpu = antiradiance::gpu::GpuSolver::new(
+                ctx.clone(),
+                &sys,
+                antiradiance::gpu::GpuOptions {
+                    precision: p.precision,
+                    features: Some(p.features),
+                    force_table_accumulation: true,
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+            let planned = antiradiance::gpu::resources::Resources::planned_memory(
+                &sys,
+                &p.features,
+                p.precision,
+                ctx.info.max_image_dimension,
+            )
+            .unwrap();
+            assert_eq!(gpu.memory().by_name(), planned.by_name(), "{name}");
+        }
+    }
+    assert!(ctx.validation_messages().is_empty());
+}
+
+/// A solver planned without lights or environment refuses them instead of ignoring them.
+#[test]
+fn a_planned_solver_refuses_sources_it_was_not_planned_for() {
+    let s = scene("convex-room.toml");
+    let sys = System::build(&s).unwrap();
+    let features = Features {
+        direct: false,
+        environment: false,
+        ..Features::for_system(&sys)
+    };
+    let mut gpu = antiradiance::gpu::GpuSolver::new(
+        context(),
+        &sys,
+        antiradiance::gpu::GpuOptions {
+            features: Some(features),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(gpu.set_environment(glam::DVec3::splat(0.1)).is_err());
+    let t = antiradiance::solver::Table::zeros(sys.rows(), sys.bins.count);
+    assert!(gpu.set_direct(&t).is_err());
+}
+
+/// The CLI reports the plan: `info --json` and `render --json` list `passes`; `--all-passes`
+/// forces everything; `--target-error` picks a measured setting and says which.
+#[test]
+fn cli_reports_passes_and_target_error() {
+    let exe = env!("CARGO_BIN_EXE_antiradiance");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/adaptive/spot-floor.toml");
+    let json = |args: &[&str]| -> serde_json::Value {
+        let out = std::process::Command::new(exe).args(args).output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let s = scene.to_str().unwrap();
+    let info = json(&["info", s, "--json"]);
+    let passes: Vec<&str> = info["passes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap())
+        .collect();
+    assert!(passes.contains(&"shadow_spot") && !passes.contains(&"antiradiance"));
+    let all = json(&["info", s, "--json", "--all-passes"]);
+    assert!(all["passes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|v| v == "antiradiance"));
+    assert!(all["memory_bytes"]["tables"].as_u64() > info["memory_bytes"]["tables"].as_u64());
+    let dir = std::env::temp_dir().join(format!("ar-adaptive-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let stats = dir.join("stats.json");
+    let out = std::process::Command::new(exe)
+        .args([
+            "render",
+            s,
+            "--backend",
+            "cpu",
+            "--target-error",
+            "0.6",
+            "--width",
+            "16",
+        ])
+        .args(["--height", "16", "--json", stats.to_str().unwrap()])
+        .args(["--exr", dir.join("out.exr").to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    assert_eq!(r["passes"], info["passes"]);
+    let t = &r["target"];
+    assert!(t["measured_error"].as_f64().unwrap() <= 0.6, "{t}");
+    assert_eq!(r["bins"], t["bins"]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("target error 0.6"));
+    std::fs::remove_dir_all(&dir).ok();
+}
