@@ -87,10 +87,10 @@ pub struct ProfileReport {
     pub savings: Option<Savings>,
 }
 
-/// The same scene profiled with `--all-passes`: what the plan saves.
+/// The same scene profiled with every pass on (at the plan's table precision): what the plan saves.
 #[derive(Debug, Clone, Serialize)]
 pub struct Savings {
-    /// Median frame with every pass on (float32 tables), ms.
+    /// Median frame with every pass on (at the plan's table precision), ms.
     pub all_passes_median_ms: f64,
     /// Median frame of the plan, ms.
     pub plan_median_ms: f64,
@@ -182,7 +182,12 @@ pub fn profile(
     let savings = if all_passes {
         None
     } else {
-        let everything = Plan::everything(scene, &sys, &surf);
+        // Every pass on at the plan's precision: the figure is what leaving passes out saves
+        // (float16 against float32 is a device property: lavapipe converts on the CPU).
+        let everything = Plan {
+            precision: plan.precision,
+            ..Plan::everything(scene, &sys, &surf)
+        };
         let a = time_frames(
             &ctx,
             scene,
