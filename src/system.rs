@@ -186,12 +186,17 @@ fn lobe_factors(
     for (k, &i) in glossy.iter().enumerate() {
         slot[i] = k as u32;
     }
+    let albedo: Vec<Option<crate::brdf::AlbedoTable>> = lobes
+        .iter()
+        .map(|l| l.map(|l| crate::brdf::AlbedoTable::new(l.ns)))
+        .collect();
     let norm: Vec<f32> = glossy
         .par_iter()
         .flat_map_iter(|&i| {
             let l = &leaves[i];
             let lobe = lobes[l.material as usize].expect("glossy leaf");
-            lobe.factors(bins, l.normal, l.cos_norm)
+            let table = albedo[l.material as usize].as_ref().expect("glossy leaf");
+            lobe.factors_with(bins, l.normal, l.cos_norm, |ct| table.at(ct))
                 .into_iter()
                 .map(|f| f as f32)
         })
