@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # Installs the system packages antiradiance needs on Debian 12 (idempotent; skips apt when present).
-# Vulkan (lavapipe, loader, validation layers) and Debian's static shaderc are for the GPU passes.
+# Vulkan (lavapipe, loader, validation layers) for the GPU passes; glslc compiles the shaders at build time.
 set -euo pipefail
 pkgs=(mesa-vulkan-drivers libvulkan1 libvulkan-dev vulkan-validationlayers vulkan-tools
-      libshaderc-dev glslang-dev spirv-tools glslc pkg-config)
+      glslc spirv-tools pkg-config)
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")

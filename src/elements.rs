@@ -2,7 +2,7 @@
 //! element size. Bisection keeps angles bounded, so sliver input faces get better, not worse.
 
 use crate::error::{Error, Result};
-use crate::scene::Scene;
+use crate::scene::{Scene, SolverSettings};
 use glam::DVec3;
 
 /// A leaf element of the finite-element discretization.
@@ -76,11 +76,11 @@ fn subdivide(t: [DVec3; 3], size: f64, out: &mut Vec<[DVec3; 3]>) {
     }
 }
 
-/// Splits every triangle of the scene into elements no longer than `solver.element_size`.
-/// Refuses (before allocating) if the count would exceed `solver.max_elements`.
-pub fn build_elements(scene: &Scene) -> Result<Vec<Element>> {
-    let size = scene.solver.element_size;
-    let limit = scene.solver.max_elements;
+/// Splits every triangle of the scene into elements no longer than `settings.element_size`.
+/// Refuses (before allocating) if the count would exceed `settings.max_elements`.
+pub fn build_elements(scene: &Scene, settings: &SolverSettings) -> Result<Vec<Element>> {
+    let size = settings.element_size;
+    let limit = settings.max_elements;
     let mut count = 0usize;
     for m in &scene.meshes {
         for tri in &m.triangles {
@@ -129,7 +129,7 @@ mod tests {
         ];
         s.add_mesh("t", p.clone(), vec![[0, 1, 2]], mat);
         s.solver.element_size = 0.3;
-        let els = build_elements(&s).unwrap();
+        let els = build_elements(&s, &s.solver).unwrap();
         let area: f64 = els.iter().map(|e| e.area).sum();
         let want = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length();
         assert!((area - want).abs() < 1e-12 * want.max(1.0));
@@ -142,7 +142,7 @@ mod tests {
             );
         }
         s.solver.max_elements = 10;
-        let err = build_elements(&s).unwrap_err().to_string();
+        let err = build_elements(&s, &s.solver).unwrap_err().to_string();
         assert!(err.contains("element_size"), "{err}");
     }
 }

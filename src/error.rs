@@ -47,14 +47,9 @@ pub enum Error {
         /// Allowed size.
         limit_bytes: u64,
     },
-    /// A Vulkan call failed.
-    #[error("Vulkan: {what} failed: {result}")]
-    Vulkan {
-        /// The operation (names the pass or object).
-        what: String,
-        /// Vulkan result code.
-        result: ash::vk::Result,
-    },
+    /// The GPU layer failed (a Vulkan call, named by its operation).
+    #[error(transparent)]
+    Gpu(#[from] crate::gpu::error::GpuError),
     /// The Vulkan device or driver lacks something the GPU solver needs.
     #[error("Vulkan device: {0}")]
     Device(String),
@@ -80,21 +75,6 @@ pub enum Error {
         /// Compiler output (`file:line: error: ...`).
         message: String,
     },
-}
-
-/// Wraps a Vulkan result with the operation that produced it.
-pub(crate) trait VkContext<T> {
-    /// Names the failed operation.
-    fn vk(self, what: &str) -> Result<T>;
-}
-
-impl<T> VkContext<T> for std::result::Result<T, ash::vk::Result> {
-    fn vk(self, what: &str) -> Result<T> {
-        self.map_err(|result| Error::Vulkan {
-            what: what.to_string(),
-            result,
-        })
-    }
 }
 
 /// Result alias for the library.

@@ -167,7 +167,7 @@ mod tests {
         let p = vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
         s.add_mesh("q", p, vec![[0, 1, 2], [0, 2, 3]], m);
         s.solver.element_size = 0.2;
-        let els = build_elements(&s).unwrap();
+        let els = build_elements(&s, &s.solver).unwrap();
         let h = Hierarchy::build(&els);
         assert_eq!(h.leaves.len(), els.len());
         assert_eq!(h.len(), 2 * els.len() - 1);

@@ -1,10 +1,13 @@
 //! Scene statistics for `antiradiance info`: sizes, linking time, memory by resource, passes.
 
+use crate::engine::{Options, Prepared};
 use crate::error::Result;
-use crate::frame::surfaces::Surfaces;
-use crate::plan::{Plan, Shading};
+use crate::gpu::frame::GpuFrame;
+use crate::gpu::memory::Purpose;
+use crate::gpu::resources::{table_format, ResourcePlan};
+use crate::plan::Shading;
+use crate::progress::Progress;
 use crate::scene::{Precision, Scene};
-use crate::system::System;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -52,20 +55,24 @@ pub struct Info {
 }
 
 impl Info {
-    /// Gathers the statistics of a built system and its plan (see [`Plan::new`]).
-    pub fn new(scene: &Scene, sys: &System, plan: &Plan) -> Result<Self> {
+    /// The statistics of a prepared scene: its system, plan and the memory both would take.
+    /// GPU memory is the solver's images and buffers as [`ResourcePlan`] describes them, on a
+    /// device that rounds float16 blending (L_in and L_push in the table format, images up to
+    /// 16384 texels); a device that truncates (lavapipe) accumulates them in float32 and
+    /// `profile` reports that.
+    pub fn new(prep: &Prepared) -> Result<Self> {
+        let (scene, sys, plan) = (&prep.scene, &prep.system, &prep.plan);
         let rows = sys.rows() as u64;
         let m = sys.bins.count as u64;
-        let gpu = crate::gpu::resources::Resources::planned_memory(
-            sys,
-            &plan.features,
-            plan.precision,
-            16384,
-        )?;
+        let format = table_format(plan.precision);
+        let gpu = ResourcePlan::new(sys, &plan.features, plan.precision, format, u32::MAX, 16384)?
+            .memory();
         let mut mem = gpu.by_name();
         mem.remove("total");
-        mem.insert("frame_images".into(), frame_bytes(scene, plan));
-        mem.insert("cpu_tables".into(), 4 * rows * m * 24);
+        let frame = GpuFrame::planned_memory(&prep.camera, &plan.features, &prep.maps);
+        mem.insert("frame_images".into(), frame.get(Purpose::FrameImages));
+        mem.insert("shadow_maps".into(), frame.get(Purpose::ShadowMaps));
+        mem.insert("cpu_tables".into(), crate::system::cpu_table_bytes(rows, m));
         Ok(Self {
             scene: scene
                 .path
@@ -91,10 +98,9 @@ impl Info {
         })
     }
 
-    /// [`Info::new`] with the plan of a render (`all_passes` as `--all-passes`).
-    pub fn of(scene: &Scene, sys: &System, all_passes: bool) -> Result<Self> {
-        let surf = Surfaces::new(scene, sys);
-        Self::new(scene, sys, &Plan::new(scene, sys, &surf, all_passes))
+    /// Prepares `scene` with `options` (no device) and gathers its statistics.
+    pub fn of(scene: &Scene, options: &Options, progress: &dyn Progress) -> Result<Self> {
+        Self::new(&Prepared::new(scene, options, None, progress)?)
     }
 
     /// Human-readable multi-line summary.
@@ -113,18 +119,4 @@ impl Info {
         }
         s
     }
-}
-
-/// Bytes of the frame's images at the camera's size (G-buffer at 2×2 samples, the vertex-radiance
-/// and splat targets only where the plan draws them, the output; shadow maps not included).
-fn frame_bytes(scene: &Scene, plan: &Plan) -> u64 {
-    let ss = crate::frame::camera::SUPERSAMPLE as u64;
-    let (w, h) = (scene.camera.width as u64, scene.camera.height as u64);
-    let samples = w * h * ss * ss;
-    let f = &plan.features;
-    // Position (RGBA32F) + depth (D32), vertex radiance and splat sums (RGBA32F), output.
-    samples * (16 + 4)
-        + if f.vertex { samples * 16 } else { 16 }
-        + if f.splat { samples * 16 } else { 16 }
-        + w * h * 16
 }

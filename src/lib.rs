@@ -11,6 +11,7 @@
 pub mod bins;
 pub mod brdf;
 pub mod elements;
+pub mod engine;
 pub mod error;
 pub mod filter;
 pub mod frame;
@@ -21,15 +22,18 @@ pub mod linker;
 pub mod metrics;
 pub mod plan;
 pub mod profile;
+pub mod progress;
 pub mod raycast;
 pub mod reference;
-pub mod render;
 pub mod scene;
+pub mod settings;
 pub mod solver;
 pub mod study;
 pub mod system;
 
+pub use engine::{Engine, Options};
 pub use error::{Error, Result};
 pub use scene::Scene;
+pub use settings::{BackendKind, Precision, Scheme};
 pub use solver::CpuSolver;
 pub use system::System;

@@ -2,14 +2,15 @@
 //! is one iteration of the scene's scheme (one propagation symmetric, 1 + antiradiance_steps
 //! asymmetric), timed by the timestamp scopes of every pass.
 
+use crate::engine::{Engine, Options, Prepared};
 use crate::error::Result;
-use crate::gpu::{Context, GpuOptions, GpuSolver};
-use crate::plan::Plan;
-use crate::scene::{Scene, Scheme};
-use crate::system::System;
+use crate::gpu::memory::MemoryReport;
+use crate::gpu::solver::Fragments;
+use crate::progress::Silent;
+use crate::scene::{Precision, Scene, Scheme};
+use crate::settings::BackendKind;
 use serde::Serialize;
 use std::collections::BTreeMap;
-use std::sync::Arc;
 
 /// Min / median / max of one pass over the frames.
 #[derive(Debug, Clone, Copy, Default, Serialize)]
@@ -60,9 +61,9 @@ pub struct ProfileReport {
     /// Bins.
     pub bins: usize,
     /// Scheme of a frame.
-    pub scheme: String,
+    pub scheme: Scheme,
     /// Table precision.
-    pub precision: String,
+    pub precision: Precision,
     /// Frames timed (after warm-up).
     pub frames: usize,
     /// CPU link construction, ms.
@@ -105,43 +106,22 @@ pub struct Savings {
 struct Timed {
     per_pass: BTreeMap<String, Vec<f64>>,
     totals: Vec<f64>,
-    memory: crate::gpu::resources::MemoryReport,
-    fragments: crate::gpu::solver::Fragments,
-    fallbacks: Vec<String>,
+    memory: MemoryReport,
+    fragments: Fragments,
 }
 
-/// Warms up and times `frames` iterations of `scene`'s scheme with `plan`.
-fn time_frames(
-    ctx: &Arc<Context>,
-    scene: &Scene,
-    sys: &System,
-    plan: &Plan,
-    frames: usize,
-    warmup: usize,
-    label: &str,
-) -> Result<Timed> {
-    let st = &scene.solver;
-    let mut gpu = GpuSolver::new(
-        ctx.clone(),
-        sys,
-        GpuOptions {
-            precision: plan.precision,
-            features: Some(plan.features),
-            ..Default::default()
-        },
-    )?;
-    gpu.set_environment(scene.environment)?;
-    gpu.initialize()?;
-    for _ in 0..warmup {
-        gpu.iterate(st.scheme, st.antiradiance_steps)?;
-    }
+/// Warms up and times `frames` iterations of the engine's scheme, one submission each.
+fn time_frames(engine: &mut Engine, frames: usize, warmup: usize, label: &str) -> Result<Timed> {
+    engine.initialize()?;
+    engine.iterate(warmup)?;
+    engine.take_timings();
     let mut per_pass: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     let mut totals = Vec::with_capacity(frames);
     for f in 0..frames {
-        gpu.iterate(st.scheme, st.antiradiance_steps)?;
+        engine.iterate(1)?;
         let mut frame: BTreeMap<String, f64> = BTreeMap::new();
-        for (name, ms) in gpu.timings() {
-            *frame.entry(name.clone()).or_default() += ms;
+        for (name, ms) in engine.take_timings() {
+            *frame.entry(name).or_default() += ms;
         }
         totals.push(frame.values().sum());
         for (name, ms) in frame {
@@ -152,62 +132,52 @@ fn time_frames(
     if frames > 0 {
         eprintln!();
     }
-    let mut fallbacks: Vec<String> = plan.precision_fallback.iter().cloned().collect();
-    fallbacks.extend(gpu.fallbacks().iter().cloned());
     Ok(Timed {
         per_pass,
         totals,
-        memory: gpu.memory(),
-        fragments: gpu.fragments(),
-        fallbacks,
+        memory: engine.memory(),
+        fragments: engine.fragments().unwrap_or_default(),
     })
 }
 
-/// Builds the scene's system and plan, warms up, then times `frames` frames. Unless
-/// `all_passes` (then only everything-on is timed), the same frames are also timed with every
-/// pass on, and the report says what the plan saved.
+/// Prepares the scene with `options` (GPU backend), warms up, then times `frames` frames.
+/// Unless `options.all_passes` (then only everything-on is timed), the same frames are also
+/// timed with every pass on at the plan's precision, and the report says what the plan saved.
 pub fn profile(
-    ctx: Arc<Context>,
     scene: &Scene,
+    options: &Options,
     frames: usize,
     warmup: usize,
-    all_passes: bool,
 ) -> Result<ProfileReport> {
-    let sys = System::build_within(scene, Some(ctx.info.device_local_bytes))?;
-    let st = &scene.solver;
-    let surf = crate::frame::surfaces::Surfaces::new(scene, &sys);
-    let plan = Plan::new(scene, &sys, &surf, all_passes);
-    let t = time_frames(&ctx, scene, &sys, &plan, frames, warmup, "")?;
+    let options = Options {
+        backend: BackendKind::Gpu,
+        context: Some(crate::engine::context_for(options)?),
+        ..options.clone()
+    };
+    let mut engine = Engine::new(scene, &options, &Silent)?;
+    let t = time_frames(&mut engine, frames, warmup, "")?;
+    let prep: &Prepared = engine.prepared();
     let median = |v: &[f64]| PassStats::of(v).median_ms;
-    let savings = if all_passes {
+    let savings = if options.all_passes {
         None
     } else {
         // Every pass on at the plan's precision: the figure is what leaving passes out saves
         // (float16 against float32 is a device property: lavapipe converts on the CPU).
-        let everything = Plan {
-            precision: plan.precision,
-            ..Plan::everything(scene, &sys, &surf)
-        };
-        let a = time_frames(
-            &ctx,
-            scene,
-            &sys,
-            &everything,
-            frames,
-            warmup,
-            " (all passes)",
-        )?;
+        let mut all = Engine::from_prepared(prep.with_every_pass(), &options, &Silent)?;
+        let a = time_frames(&mut all, frames, warmup, " (all passes)")?;
         Some(Savings {
             all_passes_median_ms: median(&a.totals),
             plan_median_ms: median(&t.totals),
             saved_ms: median(&a.totals) - median(&t.totals),
-            all_passes_bytes: a.memory.total,
-            plan_bytes: t.memory.total,
+            all_passes_bytes: a.memory.total(),
+            plan_bytes: t.memory.total(),
         })
     };
+    let st = &prep.settings;
+    let sys = &prep.system;
     // Propagations per frame: the asymmetric scheme's antiradiance steps only where planned.
     let props = match st.scheme {
-        Scheme::Asymmetric if plan.features.antiradiance => 1 + st.antiradiance_steps as u64,
+        Scheme::Asymmetric if prep.plan.features.antiradiance => 1 + st.antiradiance_steps as u64,
         _ => 1,
     };
     let fr = &t.fragments;
@@ -217,6 +187,7 @@ pub fn profile(
         ("local".to_string(), fr.local * props),
         ("pull".to_string(), fr.pull * props),
     ]);
+    let ctx = options.context.as_ref().expect("set above");
     Ok(ProfileReport {
         scene: scene
             .path
@@ -228,8 +199,8 @@ pub fn profile(
         elements: sys.leaves.len(),
         links: sys.links.links.len(),
         bins: sys.bins.count,
-        scheme: format!("{:?}", st.scheme).to_lowercase(),
-        precision: format!("{:?}", plan.precision).to_lowercase(),
+        scheme: st.scheme,
+        precision: prep.plan.precision,
         frames,
         linking_ms: sys.links.linking_ms,
         meshing_ms: sys.meshing_ms,
@@ -241,9 +212,9 @@ pub fn profile(
         frame: PassStats::of(&t.totals),
         memory_bytes: t.memory.by_name(),
         fragments,
-        fallbacks: t.fallbacks,
-        plan: plan.passes(),
-        decisions: plan.decisions.clone(),
+        fallbacks: engine.fallbacks().to_vec(),
+        plan: prep.plan.passes(),
+        decisions: prep.plan.decisions.clone(),
         savings,
     })
 }

@@ -8,7 +8,7 @@ use crate::error::{Error, Result};
 use crate::filter::FilterTables;
 use crate::hierarchy::Hierarchy;
 use crate::linker::{build_links, Links};
-use crate::scene::{Material, Scene};
+use crate::scene::{Material, Scene, SolverSettings};
 use glam::DVec3;
 use std::time::Instant;
 
@@ -60,29 +60,29 @@ pub struct System {
 /// Upper bound on host memory the CPU tables may take.
 pub const CPU_TABLE_LIMIT_BYTES: u64 = 12 << 30;
 
-/// Bytes of GPU table memory per (row, bin) at `precision`: the I_ex pair and I_total in the
-/// table format, cluster I_ex in float32, L_in and L_push in float32 (the worst case, when the
-/// device truncates float16 blending), and the lobe factors.
-pub fn gpu_bytes_per_texel(precision: crate::scene::Precision) -> u64 {
-    let texel = match precision {
-        crate::scene::Precision::F16 => 8,
-        crate::scene::Precision::F32 => 16,
-    };
-    3 * texel + 16 + 2 * 16 + 4
+/// Bytes of the CPU solver's tables for `rows × bins`: I_ex, L_in, L_push, I_total and the
+/// direct light, one f64 RGB texel each.
+pub fn cpu_table_bytes(rows: u64, bins: u64) -> u64 {
+    rows * bins * 24 * 5
 }
 
 impl System {
     /// Discretizes a scene with its `[solver]` settings.
     pub fn build(scene: &Scene) -> Result<Self> {
-        Self::build_within(scene, None)
+        Self::build_with(scene, &scene.solver, &|_, _| Ok(()))
     }
 
-    /// As [`System::build`], refusing before linking (and before anything is allocated on a
-    /// device) when the GPU tables alone would exceed `device_bytes`.
-    pub fn build_within(scene: &Scene, device_bytes: Option<u64>) -> Result<Self> {
+    /// Discretizes `scene` with `settings`. `budget(rows, bins)` runs after meshing, before
+    /// linking and before anything is allocated: the engine refuses there when a device's
+    /// tables would not fit.
+    pub fn build_with(
+        scene: &Scene,
+        settings: &SolverSettings,
+        budget: &dyn Fn(u64, usize) -> Result<()>,
+    ) -> Result<Self> {
         let t0 = Instant::now();
-        let bins = Bins::new(scene.solver.bins)?;
-        let elements = build_elements(scene)?;
+        let bins = Bins::new(settings.bins)?;
+        let elements = build_elements(scene, settings)?;
         if elements.is_empty() {
             return Err(Error::Setting {
                 field: "element_size",
@@ -90,21 +90,8 @@ impl System {
             });
         }
         let rows = 2 * elements.len() as u64 - 1;
-        if let Some(limit) = device_bytes {
-            let needed = rows * bins.count as u64 * gpu_bytes_per_texel(scene.solver.precision);
-            if needed > limit {
-                return Err(Error::TooLarge {
-                    what: format!(
-                        "GPU tables for {} elements ({rows} nodes) × {} bins (solver.element_size, solver.bins)",
-                        elements.len(),
-                        bins.count
-                    ),
-                    needed_bytes: needed,
-                    limit_bytes: limit,
-                });
-            }
-        }
-        let needed = rows * bins.count as u64 * 24 * 5;
+        budget(rows, bins.count)?;
+        let needed = cpu_table_bytes(rows, bins.count as u64);
         if needed > CPU_TABLE_LIMIT_BYTES {
             return Err(Error::TooLarge {
                 what: format!("CPU tables for {rows} nodes × {} bins", bins.count),
@@ -114,7 +101,7 @@ impl System {
         }
         let hierarchy = Hierarchy::build(&elements);
         let meshing_ms = t0.elapsed().as_secs_f64() * 1e3;
-        let mut links = build_links(&hierarchy, &elements, &bins, scene.solver.oracle);
+        let mut links = build_links(&hierarchy, &elements, &bins, settings.oracle);
         let filters = FilterTables::new(&bins, &links.used_classes);
         let t1 = Instant::now();
         crate::linker::exact_leaf_form_factors(&mut links, &hierarchy, &elements, &bins, &filters);

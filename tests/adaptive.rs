@@ -6,14 +6,16 @@
 
 mod common;
 
+use antiradiance::engine::{Options, Rendered};
 use antiradiance::frame::Image;
 use antiradiance::info::Info;
 use antiradiance::metrics::relative_errors;
 use antiradiance::plan::{Features, Plan};
-use antiradiance::render::{render, Backend, RenderOptions, Rendered, Silent};
+use antiradiance::progress::Silent;
 use antiradiance::scene::{load_scene, Precision, Scene, Scheme};
+use antiradiance::BackendKind as Backend;
 use antiradiance::{CpuSolver, System};
-use common::context;
+use common::{context, render_checked};
 use std::path::Path;
 
 fn scene(name: &str) -> Scene {
@@ -22,18 +24,13 @@ fn scene(name: &str) -> Scene {
 }
 
 fn run(s: &Scene, backend: Backend, all_passes: bool) -> Rendered {
-    let ctx = context();
-    let opts = RenderOptions {
-        context: Some(ctx.clone()),
+    let options = Options {
         backend,
         shadow_map_size: 256,
         all_passes,
         ..Default::default()
     };
-    let r = render(s, &opts, &Silent).expect("render");
-    let msgs = ctx.validation_messages();
-    assert!(msgs.is_empty(), "validation errors:\n{}", msgs.join("\n"));
-    r
+    render_checked("adaptive", s, options)
 }
 
 /// Largest pixel difference relative to the image's brightest pixel, and the relative RMSE.
@@ -227,12 +224,8 @@ fn every_rule_leaves_out_only_what_cannot_change_the_image() {
         let all = run(&s, Backend::Gpu, true);
         assert_eq!(plan.stats.passes, rule.passes, "{}", rule.scene);
         assert_eq!(all.stats.passes, everything(rule.shadows), "{}", rule.scene);
-        let want = match rule.precision {
-            Precision::F16 => "f16",
-            Precision::F32 => "f32",
-        };
-        assert_eq!(plan.stats.precision, want, "{}", rule.scene);
-        assert_eq!(all.stats.precision, "f32", "{}", rule.scene);
+        assert_eq!(plan.stats.precision, rule.precision, "{}", rule.scene);
+        assert_eq!(all.stats.precision, Precision::F32, "{}", rule.scene);
         let (worst, rmse) = difference(&plan.image, &all.image);
         println!(
             "{}: plan vs --all-passes: worst pixel {worst:.2e} of the peak, relative RMSE {rmse:.2e}; GPU time {:.0} vs {:.0} ms",
@@ -303,7 +296,11 @@ fn convex_enclosure_with_cluster_links_is_closer_to_the_exact_answer_without_ant
     s.solver.oracle = 1.0;
     let sys = System::build(&s).unwrap();
     let surf = antiradiance::frame::surfaces::Surfaces::new(&s, &sys);
-    assert!(!Plan::analyze(&s, &sys, &surf).features.antiradiance);
+    assert!(
+        !Plan::analyze(&s, &sys, &surf, s.solver.precision)
+            .features
+            .antiradiance
+    );
     let want = le / (1.0 - rho);
     let error = |antiradiance: bool| {
         let mut c = CpuSolver::new(&sys);
@@ -331,8 +328,14 @@ fn memory_follows_the_plan() {
     for name in ["convex-room.toml", "sphere.toml", "spot-floor.toml"] {
         let s = scene(name);
         let sys = System::build(&s).unwrap();
-        let plan = Info::of(&s, &sys, false).unwrap();
-        let all = Info::of(&s, &sys, true).unwrap();
+        let info = |all_passes| {
+            let o = Options {
+                all_passes,
+                ..Options::default()
+            };
+            Info::of(&s, &o, &Silent).unwrap()
+        };
+        let (plan, all) = (info(false), info(true));
         for k in ["tables", "frame_images"] {
             assert!(
                 plan.memory_bytes[k] < all.memory_bytes[k],
@@ -343,7 +346,7 @@ fn memory_follows_the_plan() {
         }
         let surf = antiradiance::frame::surfaces::Surfaces::new(&s, &sys);
         for p in [
-            Plan::analyze(&s, &sys, &surf),
+            Plan::analyze(&s, &sys, &surf, s.solver.precision),
             Plan::everything(&s, &sys, &surf),
         ] {
             let gpu = antiradiance::gpu::GpuSolver::new(
@@ -357,13 +360,17 @@ fn memory_follows_the_plan() {
                 },
             )
             .unwrap();
-            let planned = antiradiance::gpu::resources::Resources::planned_memory(
+            let format = antiradiance::gpu::resources::table_format(p.precision);
+            let planned = antiradiance::gpu::resources::ResourcePlan::new(
                 &sys,
                 &p.features,
                 p.precision,
+                format,
+                u32::MAX,
                 ctx.info.max_image_dimension,
             )
-            .unwrap();
+            .unwrap()
+            .memory();
             assert_eq!(gpu.memory().by_name(), planned.by_name(), "{name}");
         }
     }

@@ -4,39 +4,24 @@
 
 mod common;
 
+use antiradiance::engine::{Options, Rendered};
 use antiradiance::frame::camera::{View, SUPERSAMPLE};
 use antiradiance::frame::lights::spot_falloff;
 use antiradiance::frame::Image;
-use antiradiance::render::{render, Backend, RenderOptions, Rendered, Silent};
 use antiradiance::scene::{load_scene, Light, Material, Precision, Scene};
+use antiradiance::BackendKind as Backend;
 use common::*;
 use glam::DVec3;
 use std::f64::consts::PI;
 use std::path::Path;
 
 fn run(scene: &Scene, backend: Backend, shadow: u32) -> Rendered {
-    let ctx = context();
-    let opts = RenderOptions {
-        context: Some(ctx.clone()),
+    let options = Options {
         backend,
         shadow_map_size: shadow,
         ..Default::default()
     };
-    let r = render(scene, &opts, &Silent).expect("render");
-    if backend == Backend::Gpu {
-        let msgs = ctx.validation_messages();
-        assert!(msgs.is_empty(), "validation errors:\n{}", msgs.join("\n"));
-    }
-    let bad: Vec<_> = r
-        .image
-        .pixels
-        .iter()
-        .enumerate()
-        .filter(|(_, p)| p.iter().any(|v| !v.is_finite() || *v < 0.0))
-        .take(5)
-        .collect();
-    assert!(bad.is_empty(), "{backend:?}: bad pixels {bad:?}");
-    r
+    render_checked("frame", scene, options)
 }
 
 /// An open scene with every light type, an environment and an occluder: a floor, a back wall,
@@ -395,20 +380,41 @@ fn closed_uniform_box_shows_le_over_one_minus_rho_everywhere() {
     }
 }
 
-/// Bundled scenes against golden EXRs (made by `scripts/update-goldens.sh` with the CPU
-/// backend), by relative MSE: the GPU at float16 and the CPU must both stay close.
+/// Bundled scenes against golden EXRs, by relative MSE: the GPU at float16 and the CPU must both
+/// stay close. `UPDATE_GOLDENS=1` writes the CPU images as the new goldens instead
+/// (`scripts/update-goldens.sh`), so the settings below are the only place they are written.
 #[test]
 fn bundled_scenes_match_golden_images() {
-    for (name, limit_cpu, limit_gpu) in [
-        ("cornell-box", 1e-6, 2e-3),
-        ("cornell-box-glossy", 1e-6, 2e-3),
-        ("mnroom", 1e-6, 2e-3),
+    let update = std::env::var("UPDATE_GOLDENS").is_ok_and(|v| v == "1");
+    for (name, width, height, limit_cpu, limit_gpu) in [
+        ("cornell-box", 96, 96, 1e-6, 2e-3),
+        ("cornell-box-glossy", 96, 96, 1e-6, 2e-3),
+        ("mnroom", 96, 72, 1e-6, 2e-3),
     ] {
-        let golden = Image::read_exr(Path::new(&format!("tests/golden/{name}.exr"))).unwrap();
-        let mut s = load_scene(Path::new(&format!("scenes/{name}.toml"))).unwrap();
-        golden_settings(&mut s, golden.width, golden.height);
+        let path = format!("tests/golden/{name}.exr");
+        let s = load_scene(Path::new(&format!("scenes/{name}.toml"))).unwrap();
+        // The reduced settings of the golden images.
+        let golden_options = |backend| Options {
+            backend,
+            width: Some(width),
+            height: Some(height),
+            shadow_map_size: 512,
+            solver: antiradiance::engine::SolverOverrides {
+                bins: Some(32),
+                iterations: Some(3),
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        if update {
+            let r = render_checked(name, &s, golden_options(Backend::Cpu));
+            r.image.write_exr(Path::new(&path)).unwrap();
+            println!("wrote {path}");
+            continue;
+        }
+        let golden = Image::read_exr(Path::new(&path)).unwrap();
         for (backend, limit) in [(Backend::Cpu, limit_cpu), (Backend::Gpu, limit_gpu)] {
-            let r = run(&s, backend, 512);
+            let r = render_checked(name, &s, golden_options(backend));
             let e = report(&format!("{name} {backend:?}"), &r.image, &golden);
             assert!(
                 e < limit,
@@ -416,12 +422,4 @@ fn bundled_scenes_match_golden_images() {
             );
         }
     }
-}
-
-/// The reduced settings of the golden images (the flags scripts/update-goldens.sh passes).
-fn golden_settings(s: &mut Scene, w: u32, h: u32) {
-    s.camera.width = w;
-    s.camera.height = h;
-    s.solver.bins = 32;
-    s.solver.iterations = 3;
 }

@@ -5,7 +5,7 @@ mod common;
 
 use antiradiance::gpu::layout::GpuLink;
 use antiradiance::gpu::tables::TableLayout;
-use antiradiance::gpu::{Context, ContextOptions, GpuOptions, GpuSolver};
+use antiradiance::gpu::{Context, GpuOptions, GpuSolver};
 use antiradiance::scene::{load_scene, Precision, Scene, Scheme};
 use antiradiance::solver::Table;
 use antiradiance::{CpuSolver, System};
@@ -13,23 +13,7 @@ use glam::DVec3;
 use std::path::Path;
 use std::sync::Arc;
 
-fn context() -> Arc<Context> {
-    let ctx = Context::headless(&ContextOptions {
-        validation: true,
-        device_name: None,
-    })
-    .expect("a Vulkan device (lavapipe: apt-get install mesa-vulkan-drivers)");
-    assert!(
-        ctx.validation_enabled(),
-        "validation layer must be active in tests"
-    );
-    ctx
-}
-
-fn assert_clean(ctx: &Context) {
-    let msgs = ctx.validation_messages();
-    assert!(msgs.is_empty(), "validation errors:\n{}", msgs.join("\n"));
-}
+use common::{assert_clean, context};
 
 /// Largest difference of `gpu` from `cpu`, relative to each element's scale: the largest bin of
 /// its CPU I_ex row (which holds its radiance and its antiradiance, the magnitudes that cancel in
@@ -171,8 +155,8 @@ fn compare(
         gpu.set_direct(cpu.direct_in.as_ref().unwrap()).unwrap();
     }
     let tol = match precision {
-        Precision::F32 => 1e-3,
         Precision::F16 => 2e-2,
+        _ => 1e-3,
     };
     cpu.initialize();
     gpu.initialize().unwrap();
@@ -294,7 +278,7 @@ fn default_scene_at_full_settings_matches_cpu() {
 fn embeds_in_a_host_device_and_command_buffer() {
     use antiradiance::gpu::HostDevice;
     use ash::vk;
-    let host = context();
+    let host = common::fresh_context();
     let embedded = Context::from_host(HostDevice {
         entry: host.entry.clone(),
         instance: host.instance.clone(),
@@ -306,17 +290,14 @@ fn embeds_in_a_host_device_and_command_buffer() {
         debug_utils: true,
     })
     .unwrap();
-    let scene = small("scenes/cornell-box.toml", 32, 0.5);
-    let sys = System::build(&scene).unwrap();
-    let mut gpu = GpuSolver::new(
-        embedded.clone(),
-        &sys,
-        GpuOptions {
-            precision: Precision::F32,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let mut scene = small("scenes/cornell-box.toml", 32, 0.5);
+    scene.solver.precision = Precision::F32;
+    let options = antiradiance::Options {
+        context: Some(embedded.clone()),
+        ..Default::default()
+    };
+    let mut engine =
+        antiradiance::Engine::new(&scene, &options, &antiradiance::progress::Silent).unwrap();
     let d = &host.device;
     unsafe {
         let pool = d
@@ -334,11 +315,10 @@ fn embeds_in_a_host_device_and_command_buffer() {
             .unwrap()[0];
         d.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default())
             .unwrap();
-        gpu.begin_frame(cmd);
-        gpu.record_initialize(cmd).unwrap();
-        for _ in 0..3 {
-            gpu.record_iteration(cmd, Scheme::Symmetric, 4).unwrap();
-        }
+        engine.gpu().unwrap().begin(cmd);
+        engine.record_initialize(cmd).unwrap();
+        engine.record_iterations(cmd, 3).unwrap();
+        engine.record_draw(cmd).unwrap();
         d.end_command_buffer(cmd).unwrap();
         let fence = d
             .create_fence(&vk::FenceCreateInfo::default(), None)
@@ -354,6 +334,7 @@ fn embeds_in_a_host_device_and_command_buffer() {
         d.destroy_fence(fence, None);
         d.destroy_command_pool(pool, None);
     }
+    let gpu = engine.gpu().unwrap().solver();
     let names: Vec<String> = gpu
         .read_timings()
         .unwrap()
@@ -369,11 +350,17 @@ fn embeds_in_a_host_device_and_command_buffer() {
     assert_eq!(names.iter().filter(|n| *n == "global").count(), 3);
     let images = gpu.images();
     assert_ne!(images.i_total.0, vk::Image::null());
-    let mut cpu = CpuSolver::new(&sys);
+    let gpu_ex = gpu.read_i_ex().unwrap();
+    let sys = &engine.prepared().system;
+    let mut cpu = CpuSolver::new(sys);
+    cpu.antiradiance = engine.prepared().plan.features.antiradiance;
+    cpu.set_environment(scene.environment);
     cpu.solve(Scheme::Symmetric, 3, 4);
-    let ex = worst_relative(&sys, &cpu.i_ex, &cpu.i_ex, &gpu.read_i_ex().unwrap(), false);
+    let ex = worst_relative(sys, &cpu.i_ex, &cpu.i_ex, &gpu_ex, false);
     assert!(ex.0 <= 1e-3, "embedded solve off by {:.2e}", ex.0);
-    drop(gpu);
+    let output = engine.gpu().unwrap().frame().images().output.raw;
+    assert_ne!(output, vk::Image::null());
+    drop(engine);
     drop(embedded);
     assert_clean(&host);
 }

@@ -5,8 +5,8 @@
 mod common;
 
 use antiradiance::frame::camera::View;
+use antiradiance::progress::Silent;
 use antiradiance::reference::{render_reference, Reference, ReferenceOptions};
-use antiradiance::render::Silent;
 use antiradiance::scene::{Light, Material, Scene};
 use common::*;
 use glam::DVec3;

@@ -4,55 +4,12 @@
 
 mod common;
 
-use antiradiance::render::{render, Backend, RenderOptions, Rendered, Silent};
+use antiradiance::engine::Rendered;
 use antiradiance::scene::{Material, Precision, Scene, Scheme};
+use antiradiance::BackendKind as Backend;
 use antiradiance::{CpuSolver, System};
 use common::*;
 use glam::DVec3;
-
-/// Renders with `backend`, checks every pixel and display texel is finite and non-negative and
-/// that validation stayed silent, and prints the run's statistics.
-fn run(name: &str, scene: &Scene, backend: Backend) -> Rendered {
-    let ctx = context();
-    let opts = RenderOptions {
-        context: Some(ctx.clone()),
-        backend,
-        shadow_map_size: 128,
-        ..Default::default()
-    };
-    let r = render(scene, &opts, &Silent).unwrap_or_else(|e| panic!("{name}: {e}"));
-    if backend == Backend::Gpu {
-        let msgs = ctx.validation_messages();
-        assert!(
-            msgs.is_empty(),
-            "{name}: validation errors:\n{}",
-            msgs.join("\n")
-        );
-    }
-    assert!(r.image.is_finite(), "{name} {backend:?}: non-finite pixels");
-    assert!(
-        r.image.pixels.iter().flatten().all(|v| *v >= 0.0),
-        "{name} {backend:?}: negative pixels"
-    );
-    assert!(
-        r.i_total.data.iter().all(|v| v.is_finite()),
-        "{name} {backend:?}: non-finite I_total"
-    );
-    assert!(r.stats.residuals.iter().all(|v| v.is_finite()));
-    println!(
-        "{name} {backend:?}: {} elements, {} links, {} iterations ({} scheme, {} tables), last residual {:.2e}, estimated error {:.2e}, fallbacks {:?}, warnings {:?}",
-        r.stats.elements,
-        r.stats.links,
-        r.stats.iterations,
-        r.stats.scheme,
-        r.stats.precision,
-        r.stats.residuals.last().copied().unwrap_or(0.0),
-        r.stats.estimated_error.unwrap_or(0.0),
-        r.stats.fallbacks,
-        r.stats.warnings
-    );
-    r
-}
 
 fn mean(r: &Rendered) -> f64 {
     r.image
@@ -75,14 +32,6 @@ fn worst_relative(a: &Rendered, b: &Rendered, scale: f64) -> f64 {
         .filter(|(_, y)| **y as f64 > floor)
         .map(|(x, y)| (*x as f64 / scale - *y as f64).abs() / *y as f64)
         .fold(0.0, f64::max)
-}
-
-fn view(s: &mut Scene, eye: DVec3, target: DVec3, fov: f64, size: u32) {
-    s.camera.eye = eye;
-    s.camera.target = target;
-    s.camera.fov_y_deg = fov;
-    s.camera.width = size;
-    s.camera.height = size;
 }
 
 /// A closed unit box of albedo ρ emitting 1 everywhere, seen from inside: every pixel is
@@ -115,7 +64,7 @@ fn stiff_enclosures_iterate_to_the_tolerance_or_say_they_stopped() {
             24,
         );
         let name = format!("enclosure ρ={rho}");
-        let r = run(&name, &s, backend);
+        let r = render_with(&name, &s, backend);
         let want = 1.0 / (1.0 - rho);
         let worst = r
             .image
@@ -150,7 +99,7 @@ fn stiff_enclosures_iterate_to_the_tolerance_or_say_they_stopped() {
         assert!(r.stats.fallbacks.iter().all(|f| !f.contains("scheme")));
         if backend == Backend::Gpu {
             // ρ = 0.99 amplifies float16 rounding 100×: the tables must be float32, and say so.
-            assert_eq!(r.stats.precision, "f32");
+            assert_eq!(r.stats.precision, antiradiance::Precision::F32);
             assert!(r
                 .stats
                 .fallbacks
@@ -194,11 +143,11 @@ fn lamp_scene(scale: f64, le: f64) -> Scene {
 /// scaled by a power of two per scene), and one scene holding both extremes switches to float32.
 #[test]
 fn emitters_from_1e_minus_4_to_1e6_scale_linearly() {
-    let unit_cpu = run("lamp Le=1", &lamp_scene(1.0, 1.0), Backend::Cpu);
-    let unit_gpu = run("lamp Le=1", &lamp_scene(1.0, 1.0), Backend::Gpu);
+    let unit_cpu = render_with("lamp Le=1", &lamp_scene(1.0, 1.0), Backend::Cpu);
+    let unit_gpu = render_with("lamp Le=1", &lamp_scene(1.0, 1.0), Backend::Gpu);
     for le in [1e-4, 1e-2, 1e2, 1e4, 1e6] {
         for (backend, unit) in [(Backend::Cpu, &unit_cpu), (Backend::Gpu, &unit_gpu)] {
-            let r = run(&format!("lamp Le={le:e}"), &lamp_scene(1.0, le), backend);
+            let r = render_with(&format!("lamp Le={le:e}"), &lamp_scene(1.0, le), backend);
             let e = worst_relative(&r, unit, le);
             println!(
                 "Le={le:e} {backend:?}: worst pixel {:.2e} from Le × image(1)",
@@ -228,8 +177,8 @@ fn emitters_from_1e_minus_4_to_1e6_scale_linearly() {
         ],
         dim,
     );
-    let r = run("lamps 1e6 + 1e-4", &s, Backend::Gpu);
-    assert_eq!(r.stats.precision, "f32");
+    let r = render_with("lamps 1e6 + 1e-4", &s, Backend::Gpu);
+    assert_eq!(r.stats.precision, antiradiance::Precision::F32);
     assert!(
         r.stats
             .fallbacks
@@ -245,9 +194,9 @@ fn emitters_from_1e_minus_4_to_1e6_scale_linearly() {
 #[test]
 fn images_are_scale_invariant() {
     for backend in [Backend::Cpu, Backend::Gpu] {
-        let unit = run("lamp at scale 1", &lamp_scene(1.0, 10.0), backend);
+        let unit = render_with("lamp at scale 1", &lamp_scene(1.0, 10.0), backend);
         for scale in [1e-3, 1e4] {
-            let r = run(
+            let r = render_with(
                 &format!("lamp at scale {scale:e}"),
                 &lamp_scene(scale, 10.0),
                 backend,
@@ -314,8 +263,8 @@ fn nearly_touching_and_coplanar_surfaces_stay_bounded() {
     );
     assert!(worst < bound, "{worst} ≥ {bound}");
     view(&mut s, p(0.0, 1.5, 2.0), p(0.0, 0.0, 0.0), 50.0, 24);
-    let c = run("touching/coplanar", &s, Backend::Cpu);
-    let g = run("touching/coplanar", &s, Backend::Gpu);
+    let c = render_with("touching/coplanar", &s, Backend::Cpu);
+    let g = render_with("touching/coplanar", &s, Backend::Gpu);
     // Tables, not pixels: coplanar overlapping faces z-fight differently in a rasterizer and a
     // ray caster, which is image formation, not the solve.
     let peak = c
@@ -334,169 +283,6 @@ fn nearly_touching_and_coplanar_surfaces_stay_bounded() {
         / peak;
     println!("touching/coplanar: GPU vs CPU I_total, worst {e:.2e} of the largest texel");
     assert!(e < 0.01, "{e}");
-}
-
-/// Black slabs between an emitter and a floor: only antiradiance removes the light U sends
-/// through them. `layers` parallel slabs, each larger than the lamp's shadow footprint.
-fn layered(layers: usize, albedo: f64, thickness: f64) -> Scene {
-    let mut s = Scene::empty();
-    let e = s.add_material(Material {
-        ke: DVec3::splat(10.0),
-        ..Material::diffuse("lamp", 0.0)
-    });
-    let slab = s.add_material(Material::diffuse("slab", albedo));
-    let f = s.add_material(Material::diffuse("floor", 0.5));
-    floor(&mut s, 2.0, f);
-    let p = DVec3::new;
-    lamp(&mut s, 0.2, 2.0, e);
-    for k in 0..layers {
-        let y = 0.3 + 1.4 * k as f64 / layers.max(1) as f64;
-        add_box(
-            &mut s,
-            &format!("slab{k}"),
-            p(-0.6, y, -0.6),
-            p(0.6, y + thickness, 0.6),
-            slab,
-            false,
-        );
-    }
-    s.solver.bins = 64;
-    s.solver.element_size = 0.3;
-    s.solver.oracle = 0.5;
-    // Antiradiance reaches one more layer per iteration; ten layers settle after ~40.
-    s.solver.iterations = 8 + 4 * layers;
-    s
-}
-
-/// Irradiance on the floor under the stack (|x|, |z| < 0.1: in every slab's umbra) relative to
-/// the same spot without slabs.
-fn leak(layers: usize, thickness: f64) -> f64 {
-    let under = |s: &Scene| {
-        let sys = System::build(s).unwrap();
-        let mut solver = CpuSolver::new(&sys);
-        solver.solve(Scheme::Symmetric, s.solver.iterations, 4);
-        assert!(solver.i_ex.data.iter().all(|v| v.is_finite()));
-        let (mut sum, mut n) = (0.0, 0);
-        for (li, l) in sys.leaves.iter().enumerate() {
-            let c = sys.elements[sys.hierarchy.element(l.node).unwrap() as usize].center;
-            if c.y.abs() < 1e-9 && c.x.abs() < 0.6 && c.z.abs() < 0.6 && l.normal.y > 0.5 {
-                sum += solver.irradiance(li).x;
-                n += 1;
-            }
-        }
-        assert!(n > 0);
-        sum / n as f64
-    };
-    under(&layered(layers, 0.0, thickness)) / under(&layered(0, 0.0, thickness))
-}
-
-/// A thin wall (1% of the room) between a bright emitter and the floor, and ten parallel
-/// occluding layers: antiradiance must still cancel the light U sends through them.
-#[test]
-fn thin_wall_and_ten_layers_leak_within_bounds() {
-    for (layers, thickness, bound) in [(1, 0.01, 0.05), (10, 0.02, 0.05)] {
-        let l = leak(layers, thickness);
-        println!("{layers} layer(s) {thickness} thick: floor under them gets {:.2}% of the unoccluded irradiance", l * 100.0);
-        assert!(l.abs() < bound, "{layers} layers: leak {l}");
-    }
-    // Grey slabs (albedo 0.5): light bouncing between ten layers while antiradiance crosses
-    // them. On this configuration the discrete system grows in both schemes (the paper's
-    // warning about multiple occlusion); the loop must say so and stay finite.
-    let mut s = layered(10, 0.5, 0.02);
-    s.solver.element_size = 0.6;
-    s.solver.oracle = 1.0;
-    s.solver.iterations = 30;
-    view(
-        &mut s,
-        DVec3::new(0.0, 1.2, 3.0),
-        DVec3::new(0.0, 0.8, 0.0),
-        60.0,
-        16,
-    );
-    let c = run("ten grey layers", &s, Backend::Cpu);
-    let converged = *c.stats.residuals.last().unwrap() < 1e-3;
-    assert!(
-        converged
-            || c.stats
-                .fallbacks
-                .iter()
-                .any(|f| f.contains("does not converge")),
-        "neither converged nor reported: {:?}",
-        c.stats.residuals
-    );
-}
-
-/// Slabs spanning a closed room wall to wall (their sides lie in the walls' planes, contact
-/// along every edge). Two slabs: the symmetric scheme grows, the loop notices, says so and
-/// restarts with the asymmetric scheme, which converges. Ten staggered slabs: the discrete system
-/// has an eigenvalue above one and both schemes grow; the loop keeps the iterate closest to
-/// convergence, says so, and still hands out a finite image.
-#[test]
-fn divergence_is_detected_reported_and_never_reaches_the_image() {
-    let build = |layers: usize, staggered: bool| {
-        let mut s = Scene::empty();
-        let m = s.add_material(Material::diffuse("m", 0.9));
-        let e = s.add_material(Material {
-            ke: DVec3::ONE,
-            ..Material::diffuse("e", 0.5)
-        });
-        let p = DVec3::new;
-        add_box(&mut s, "room", p(0.0, -0.1, 0.0), p(1.0, 1.2, 1.0), m, true);
-        quad(
-            &mut s,
-            "lamp",
-            [
-                p(0.0, 1.19, 0.0),
-                p(1.0, 1.19, 0.0),
-                p(1.0, 1.19, 1.0),
-                p(0.0, 1.19, 1.0),
-            ],
-            e,
-        );
-        for k in 0..layers {
-            let y = 0.05 + 0.1 * k as f64;
-            let (x0, w) = match (staggered, k % 2) {
-                (false, _) => (0.0, 1.0),
-                (true, 0) => (0.0, 0.7),
-                (true, _) => (0.3, 0.7),
-            };
-            add_box(
-                &mut s,
-                &format!("l{k}"),
-                p(x0, y, 0.0),
-                p(x0 + w, y + 0.02, 1.0),
-                m,
-                false,
-            );
-        }
-        s.solver.bins = 64;
-        s.solver.element_size = 0.25;
-        s.solver.iterations = 40;
-        view(&mut s, p(0.5, 0.8, 0.95), p(0.5, 0.3, 0.0), 70.0, 16);
-        s
-    };
-    let r = run("two wall-to-wall slabs", &build(2, false), Backend::Cpu);
-    let f = r.stats.fallbacks.join(" | ");
-    assert!(f.contains("symmetric scheme does not converge"), "{f}");
-    assert!(!f.contains("either"), "{f}");
-    assert_eq!(r.stats.scheme, "asymmetric");
-    let last = *r.stats.residuals.last().unwrap();
-    assert!(
-        last < 1e-2 && last < r.stats.residuals[0] / 100.0,
-        "{:?}",
-        r.stats.residuals
-    );
-
-    let mut s = build(10, true);
-    s.solver.iterations = 30;
-    let r = run("ten staggered wall-to-wall slabs", &s, Backend::Cpu);
-    let f = r.stats.fallbacks.join(" | ");
-    assert!(f.contains("symmetric scheme does not converge"), "{f}");
-    assert!(
-        f.contains("asymmetric scheme does not converge either"),
-        "{f}"
-    );
-    assert!(r.stats.energies.iter().all(|e| e.is_finite()));
 }
 
 /// Phong exponents up to 1e4 in a closed box: the lobe as the bins sample it conserves the
@@ -555,8 +341,8 @@ fn near_mirror_phong_up_to_1e4_converges_with_bounded_energy() {
         70.0,
         24,
     );
-    let c = run("Phong 1e4", &s, Backend::Cpu);
-    let g = run("Phong 1e4", &s, Backend::Gpu);
+    let c = render_with("Phong 1e4", &s, Backend::Cpu);
+    let g = render_with("Phong 1e4", &s, Backend::Gpu);
     let e = worst_relative(&g, &c, 1.0);
     println!("Phong 1e4: GPU vs CPU worst pixel {e:.2e}");
     assert!(e < 0.1, "{e}");
@@ -573,8 +359,8 @@ fn extreme_discretizations_run_on_both_backends() {
     s.solver.element_size = 1.0;
     s.solver.oracle = 4.0;
     s.solver.iterations = 2;
-    let c = run("1024 bins", &s, Backend::Cpu);
-    let g = run("1024 bins", &s, Backend::Gpu);
+    let c = render_with("1024 bins", &s, Backend::Cpu);
+    let g = render_with("1024 bins", &s, Backend::Gpu);
     println!(
         "1024 bins: GPU vs CPU worst pixel {:.2e}",
         worst_relative(&g, &c, 1.0)
@@ -599,8 +385,8 @@ fn extreme_discretizations_run_on_both_backends() {
     view(&mut s, p(0.0, 2.0, 2.0), p(0.0, 0.0, 0.0), 50.0, 16);
     let sys = System::build(&s).unwrap();
     assert_eq!(sys.leaves.len(), 1);
-    let c = run("single element", &s, Backend::Cpu);
-    let g = run("single element", &s, Backend::Gpu);
+    let c = render_with("single element", &s, Backend::Cpu);
+    let g = render_with("single element", &s, Backend::Gpu);
     // Emission 2 plus the environment reflected (ρ·E/π = 0.5·0.5 = 0.25) where it is seen.
     let brightest = c
         .image
@@ -637,8 +423,8 @@ fn extreme_discretizations_run_on_both_backends() {
         areas.iter().cloned().fold(0.0, f64::max) / areas.iter().cloned().fold(f64::MAX, f64::min);
     println!("areas span {span:.1e}");
     assert!(span > 1e6, "{span}");
-    let c = run("six orders of area", &s, Backend::Cpu);
-    let g = run("six orders of area", &s, Backend::Gpu);
+    let c = render_with("six orders of area", &s, Backend::Cpu);
+    let g = render_with("six orders of area", &s, Backend::Gpu);
     let e = worst_relative(&g, &c, 1.0);
     println!("six orders of area: GPU vs CPU worst pixel {e:.2e}");
     assert!(e < 0.02, "{e}");

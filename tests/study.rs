@@ -3,11 +3,12 @@
 
 mod common;
 
-use antiradiance::gpu::{Context, ContextOptions};
+use antiradiance::engine::Options;
+use antiradiance::progress::Silent;
 use antiradiance::reference::{render_reference, ReferenceOptions};
-use antiradiance::render::{Backend, RenderOptions, Silent};
 use antiradiance::scene::{Material, Scene};
 use antiradiance::study::{self, StudyOptions, Truth, CSV_HEADER};
+use antiradiance::BackendKind;
 use common::*;
 use glam::DVec3;
 
@@ -73,15 +74,10 @@ fn tiny_study_writes_csv_and_plots() {
     o.bins = vec![32, 64];
     o.element_sizes = vec![0.25];
     o.spp = vec![1, 4, 16];
-    let ctx = Context::headless(&ContextOptions {
-        validation: true,
-        device_name: None,
-    })
-    .unwrap();
-    assert!(ctx.validation_enabled());
-    o.render = RenderOptions {
+    let ctx = context();
+    o.render = Options {
         context: Some(ctx.clone()),
-        backend: Backend::Gpu,
+        backend: BackendKind::Gpu,
         shadow_map_size: 64,
         ..Default::default()
     };

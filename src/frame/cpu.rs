@@ -8,7 +8,7 @@ use super::lights::direct_radiance;
 use super::shadow::ShadowMaps;
 use super::surfaces::{display_radiance, splat_weight, vertex_values, Surfaces, MODE_VERTEX};
 use crate::raycast::RayCaster;
-use crate::scene::Scene;
+use crate::scene::{Camera, Scene};
 use crate::solver::Table;
 use crate::system::System;
 use glam::DVec3;
@@ -52,16 +52,17 @@ impl SplatGrid {
     }
 }
 
-/// Renders `scene`'s camera view from the solved display intensities `i_total`.
+/// Renders `camera`'s view of `scene` from the solved display intensities `i_total`.
 pub fn render(
     scene: &Scene,
+    camera: &Camera,
     sys: &System,
     i_total: &Table,
     maps: &ShadowMaps,
     surf: &Surfaces,
     caster: &RayCaster,
 ) -> Image {
-    let view = View::new(&scene.camera);
+    let view = View::new(camera);
     let verts = vertex_values(surf, sys, i_total, view.eye);
     let grid = SplatGrid::new(surf);
     let (w, h) = (view.width as usize, view.height as usize);

@@ -304,7 +304,7 @@ mod tests {
         );
         assert!(glsl.contains(&mode), "frame.glsl lacks `{mode}`");
         let gbuffer = include_str!("../../glsl/gbuffer.vert");
-        let filler = format!("const uint AR_FILLER = {:#x}u;", crate::gpu::frame::FILLER);
+        let filler = format!("const uint AR_FILLER = {:#x}u;", crate::gpu::pack::FILLER);
         assert!(gbuffer.contains(&filler), "gbuffer.vert lacks `{filler}`");
     }
 

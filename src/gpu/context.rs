@@ -5,7 +5,8 @@
 //! rasterization uses VK_EXT_line_rasterization's rectangular (or Bresenham) mode when present
 //! so that every link line covers exactly its texels (see [`LineMode`]).
 
-use crate::error::{Error, Result, VkContext};
+use crate::error::{Error, Result};
+use crate::gpu::error::VkContext;
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use std::ffi::{c_void, CStr, CString};
@@ -44,6 +45,9 @@ pub struct ContextOptions {
     /// Pick the first device whose name contains this (else `ANTIRADIANCE_DEVICE`, else prefer
     /// a discrete GPU).
     pub device_name: Option<String>,
+    /// Do not read or write the pipeline cache file ([`super::cache`]; by default it is kept in
+    /// the user's cache directory, `ANTIRADIANCE_CACHE_DIR` overrides it).
+    pub no_pipeline_cache: bool,
 }
 
 /// What the solver learned about the device.
@@ -131,6 +135,7 @@ pub struct Context {
     owned: bool,
     line_ext: bool,
     f16_rounding: std::sync::OnceLock<super::diagnostics::BlendRounding>,
+    pipeline_cache: super::cache::PipelineCache,
 }
 
 /// A device created by a host application, for [`Context::from_host`].
@@ -284,6 +289,9 @@ impl Context {
         } else {
             LineMode::Bresenham
         };
+        let cache_dir = (!opts.no_pipeline_cache)
+            .then(super::cache::default_dir)
+            .flatten();
         Self::finish(
             entry,
             instance,
@@ -296,6 +304,7 @@ impl Context {
             has_debug,
             messenger,
             log,
+            cache_dir,
             true,
         )
     }
@@ -318,6 +327,7 @@ impl Context {
             host.debug_utils,
             None,
             Arc::new(ValidationLog::default()),
+            super::cache::default_dir(),
             false,
         )
     }
@@ -335,6 +345,7 @@ impl Context {
         has_debug: bool,
         messenger: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
         validation: Arc<ValidationLog>,
+        cache_dir: Option<std::path::PathBuf>,
         owned: bool,
     ) -> Result<Arc<Self>> {
         let props = unsafe { instance.get_physical_device_properties(physical_device) };
@@ -384,6 +395,8 @@ impl Context {
         }
         .vk("creating the command pool")?;
         let debug = has_debug.then(|| ash::ext::debug_utils::Device::new(&instance, &device));
+        let pipeline_cache =
+            super::cache::PipelineCache::open(&device, &props, cache_dir.as_deref());
         let ctx = Self {
             entry,
             instance,
@@ -401,13 +414,20 @@ impl Context {
             owned,
             line_ext,
             f16_rounding: std::sync::OnceLock::new(),
+            pipeline_cache,
         };
         ctx.name(pool, "antiradiance command pool");
         Ok(Arc::new(ctx))
     }
 
+    /// The pipeline cache every pipeline of this context is created with (kept between runs
+    /// in the cache directory, see [`super::cache`]).
+    pub fn pipeline_cache(&self) -> vk::PipelineCache {
+        self.pipeline_cache.raw()
+    }
+
     /// How this device rounds additive float16 blending (probed once, on first use).
-    pub fn f16_blend_rounding(&self) -> Result<super::diagnostics::BlendRounding> {
+    pub fn f16_blend_rounding(self: &Arc<Self>) -> Result<super::diagnostics::BlendRounding> {
         if let Some(r) = self.f16_rounding.get() {
             return Ok(*r);
         }
@@ -541,6 +561,7 @@ impl Drop for Context {
     fn drop(&mut self) {
         unsafe {
             let _ = self.device.device_wait_idle();
+            self.pipeline_cache.save_and_destroy(&self.device);
             self.device.destroy_command_pool(self.pool, None);
             ManuallyDrop::drop(&mut self.allocator);
             if self.owned {

@@ -5,17 +5,23 @@
 use super::barrier::{transition, Access};
 use super::context::Context;
 use super::layout::{as_bytes, GpuLink, PassConstants};
-use super::passes::{begin_rendering, end_rendering, Load};
-use super::pipelines::{create, Layouts, PipelineDesc, Target};
-use super::resources::decode;
+use super::memory::{Buffer, ImageDesc, Purpose};
+use super::pack::decode;
+use super::passes::{begin_rendering, end_rendering, global, Load};
+use super::pipelines::{create, Layouts, Target};
 use super::tables::TableLayout;
 use crate::error::Result;
 use ash::vk;
+use std::sync::Arc;
 
 /// Draws `links` (only receiver and span matter) with the global pass's vertex shader and a
 /// fragment shader that adds 1, and returns the hit count of every texel (row-major over the
 /// `layout.width() × layout.rows_per_column` image).
-pub fn line_coverage(ctx: &Context, layout: &TableLayout, links: &[GpuLink]) -> Result<Vec<f32>> {
+pub fn line_coverage(
+    ctx: &Arc<Context>,
+    layout: &TableLayout,
+    links: &[GpuLink],
+) -> Result<Vec<f32>> {
     draw_lines(
         ctx,
         layout,
@@ -37,7 +43,7 @@ pub enum BlendRounding {
 
 /// Adds 0.7 a hundred times into one float16 texel: 69.44 with round-to-nearest, 68.94 with
 /// truncation (exact: 70).
-pub fn f16_blend_rounding(ctx: &Context) -> Result<BlendRounding> {
+pub fn f16_blend_rounding(ctx: &Arc<Context>) -> Result<BlendRounding> {
     let layout = TableLayout::new(1, 1, ctx.info.max_image_dimension)?;
     let links = vec![
         GpuLink {
@@ -61,47 +67,33 @@ pub fn f16_blend_rounding(ctx: &Context) -> Result<BlendRounding> {
 }
 
 fn draw_lines(
-    ctx: &Context,
+    ctx: &Arc<Context>,
     layout: &TableLayout,
     links: &[GpuLink],
     frag: &str,
     format: vk::Format,
 ) -> Result<Vec<f32>> {
     let layouts = Layouts::new(ctx)?;
-    let pipeline = create(
+    let targets = [Target {
+        format,
+        additive: true,
+        write: true,
+    }];
+    let pipeline = create(ctx, &layouts.pipeline, &global::desc(frag, &targets))?;
+    let buf = Buffer::upload(
         ctx,
-        layouts.pipeline,
-        &PipelineDesc {
-            name: frag,
-            vert: "global.vert",
-            frag,
-            topology: vk::PrimitiveTopology::LINE_LIST,
-            stride: std::mem::size_of::<GpuLink>() as u32,
-            attributes: &[
-                (vk::Format::R32G32B32A32_UINT, 0),
-                (vk::Format::R32_SFLOAT, 16),
-            ],
-            targets: &[Target {
-                format,
-                additive: true,
-                write: true,
-            }],
-            specialization: &[],
-            per_vertex: false,
-            depth: false,
-        },
-    )?;
-    let mut buf = ctx.upload_buffer(
         "coverage lines",
         as_bytes(links),
         vk::BufferUsageFlags::VERTEX_BUFFER,
     )?;
-    let mut img = ctx.create_image(
+    let mut img = ImageDesc::new(
         "coverage target",
         layout.width(),
         layout.rows_per_column,
         format,
-    )?;
+        Purpose::Scratch,
+    )
+    .create(ctx)?;
     let c = PassConstants {
         bins: layout.bins,
         rows_per_column: layout.rows_per_column,
@@ -111,14 +103,14 @@ fn draw_lines(
         line_offset: ctx.info.line_mode.endpoint_offset(),
         ..Default::default()
     };
-    let r = ctx.submit_and_wait(|cmd| unsafe {
+    ctx.submit_and_wait(|cmd| unsafe {
         transition(ctx, cmd, &mut [(&mut img, Access::Attachment)]);
         begin_rendering(ctx, cmd, &[(&img, Load::Clear)]);
         ctx.device
-            .cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
+            .cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline.raw());
         ctx.device.cmd_push_constants(
             cmd,
-            layouts.pipeline,
+            layouts.pipeline.raw(),
             vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT,
             0,
             as_bytes(std::slice::from_ref(&c)),
@@ -126,11 +118,6 @@ fn draw_lines(
         ctx.device.cmd_bind_vertex_buffers(cmd, 0, &[buf.raw], &[0]);
         ctx.device.cmd_draw(cmd, 2, links.len() as u32, 0, 0);
         end_rendering(ctx, cmd);
-    });
-    let out = r.and_then(|_| ctx.read_image(&mut img));
-    unsafe { ctx.device.destroy_pipeline(pipeline, None) };
-    layouts.destroy(ctx);
-    ctx.destroy_image(&mut img);
-    ctx.destroy_buffer(&mut buf);
-    Ok(decode(format, &out?).iter().map(|t| t[0]).collect())
+    })?;
+    Ok(decode(format, &img.read()?).iter().map(|t| t[0]).collect())
 }

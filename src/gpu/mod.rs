@@ -3,19 +3,23 @@
 //! images, pull as lines. See the README for the module ↔ paper map.
 
 pub mod barrier;
+pub mod cache;
 pub mod context;
 pub mod diagnostics;
+pub mod error;
 pub mod frame;
+pub mod handle;
 pub mod layout;
 pub mod memory;
+pub mod pack;
 pub mod passes;
 pub mod pipelines;
 pub mod profiler;
-pub mod range;
 pub mod resources;
 pub mod shaders;
 pub mod solver;
 pub mod tables;
 
 pub use context::{Context, ContextOptions, HostDevice, LineMode};
+pub use error::GpuError;
 pub use solver::{GpuOptions, GpuSolver};

@@ -3,11 +3,14 @@
 //! pipeline, so accumulation is explicit where a pipeline is made.
 
 use super::context::Context;
+use super::handle::Owned;
 use super::layout::{binding, PassConstants};
-use super::shaders::compile;
-use crate::error::{Result, VkContext};
+use super::shaders::spirv;
+use crate::error::Result;
+use crate::gpu::error::VkContext;
 use ash::vk;
 use std::ffi::CStr;
+use std::sync::Arc;
 
 /// One color target of a pipeline.
 #[derive(Debug, Clone, Copy)]
@@ -45,17 +48,17 @@ pub struct PipelineDesc<'a> {
     pub depth: bool,
 }
 
-/// The shared layouts.
+/// A descriptor-set layout and the pipeline layout made of it plus push constants.
 pub struct Layouts {
-    /// Set layout with every binding of [`binding`].
-    pub set: vk::DescriptorSetLayout,
-    /// Pipeline layout: that set plus [`PassConstants`] push constants.
-    pub pipeline: vk::PipelineLayout,
+    /// Set layout.
+    pub set: Owned<vk::DescriptorSetLayout>,
+    /// Pipeline layout: that set plus the push constants.
+    pub pipeline: Owned<vk::PipelineLayout>,
 }
 
 impl Layouts {
     /// Creates the solver's layouts.
-    pub fn new(ctx: &Context) -> Result<Self> {
+    pub fn new(ctx: &Arc<Context>) -> Result<Self> {
         let kinds = descriptor_kinds(binding::COUNT, &binding::BUFFERS);
         Self::with(
             ctx,
@@ -68,7 +71,7 @@ impl Layouts {
     /// A set layout with binding `i` of type `kinds[i]` and a pipeline layout with that set and
     /// `push_bytes` of push constants (vertex + fragment stages).
     pub fn with(
-        ctx: &Context,
+        ctx: &Arc<Context>,
         name: &str,
         kinds: &[vk::DescriptorType],
         push_bytes: u32,
@@ -91,11 +94,11 @@ impl Layouts {
             )
         }
         .vk("creating the descriptor set layout")?;
-        ctx.name(set, &format!("{name} set layout"));
+        let set = Owned::new(ctx, set, &format!("{name} set layout"));
         let ranges = [vk::PushConstantRange::default()
             .stage_flags(vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT)
             .size(push_bytes)];
-        let sets = [set];
+        let sets = [set.raw()];
         let pipeline = unsafe {
             ctx.device.create_pipeline_layout(
                 &vk::PipelineLayoutCreateInfo::default()
@@ -105,16 +108,8 @@ impl Layouts {
             )
         }
         .vk("creating the pipeline layout")?;
-        ctx.name(pipeline, &format!("{name} pipeline layout"));
+        let pipeline = Owned::new(ctx, pipeline, &format!("{name} pipeline layout"));
         Ok(Self { set, pipeline })
-    }
-
-    /// Frees the layouts.
-    pub fn destroy(&self, ctx: &Context) {
-        unsafe {
-            ctx.device.destroy_pipeline_layout(self.pipeline, None);
-            ctx.device.destroy_descriptor_set_layout(self.set, None);
-        }
     }
 }
 
@@ -133,7 +128,7 @@ pub fn descriptor_kinds(count: u32, buffers: &[u32]) -> Vec<vk::DescriptorType> 
 }
 
 /// A nearest, clamp-to-edge sampler for the combined image samplers (reads are `texelFetch`).
-pub fn texel_sampler(ctx: &Context, name: &str) -> Result<vk::Sampler> {
+pub fn texel_sampler(ctx: &Arc<Context>, name: &str) -> Result<Owned<vk::Sampler>> {
     let sampler = unsafe {
         ctx.device.create_sampler(
             &vk::SamplerCreateInfo::default()
@@ -145,17 +140,16 @@ pub fn texel_sampler(ctx: &Context, name: &str) -> Result<vk::Sampler> {
         )
     }
     .vk(name)?;
-    ctx.name(sampler, name);
-    Ok(sampler)
+    Ok(Owned::new(ctx, sampler, name))
 }
 
 /// A descriptor pool for `sets` sets whose bindings are `kinds`.
 pub fn descriptor_pool(
-    ctx: &Context,
+    ctx: &Arc<Context>,
     kinds: &[vk::DescriptorType],
     sets: u32,
     name: &str,
-) -> Result<vk::DescriptorPool> {
+) -> Result<Owned<vk::DescriptorPool>> {
     let count = |t| kinds.iter().filter(|&&k| k == t).count() as u32 * sets;
     let sizes: Vec<_> = [
         vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
@@ -177,30 +171,95 @@ pub fn descriptor_pool(
         )
     }
     .vk(name)?;
-    ctx.name(pool, name);
-    Ok(pool)
+    Ok(Owned::new(ctx, pool, name))
+}
+
+/// Allocates one descriptor set of `layout` from `pool`.
+pub fn allocate_set(
+    ctx: &Context,
+    pool: &Owned<vk::DescriptorPool>,
+    layout: &Owned<vk::DescriptorSetLayout>,
+    name: &str,
+) -> Result<vk::DescriptorSet> {
+    let set = unsafe {
+        ctx.device.allocate_descriptor_sets(
+            &vk::DescriptorSetAllocateInfo::default()
+                .descriptor_pool(pool.raw())
+                .set_layouts(&[layout.raw()]),
+        )
+    }
+    .vk(name)?[0];
+    ctx.name(set, name);
+    Ok(set)
+}
+
+/// Writes `set`: each `(binding, view)` as a combined image sampler in shader-read layout with
+/// `sampler`, each `(binding, buffer)` as a whole storage buffer.
+pub fn write_set(
+    ctx: &Context,
+    set: vk::DescriptorSet,
+    sampler: vk::Sampler,
+    images: &[(u32, vk::ImageView)],
+    buffers: &[(u32, vk::Buffer)],
+) {
+    let image_infos: Vec<[vk::DescriptorImageInfo; 1]> = images
+        .iter()
+        .map(|(_, view)| {
+            [vk::DescriptorImageInfo::default()
+                .sampler(sampler)
+                .image_view(*view)
+                .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)]
+        })
+        .collect();
+    let buffer_infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
+        .iter()
+        .map(|(_, b)| {
+            [vk::DescriptorBufferInfo::default()
+                .buffer(*b)
+                .range(vk::WHOLE_SIZE)]
+        })
+        .collect();
+    let mut writes: Vec<vk::WriteDescriptorSet> = images
+        .iter()
+        .zip(&image_infos)
+        .map(|((b, _), info)| {
+            vk::WriteDescriptorSet::default()
+                .dst_set(set)
+                .dst_binding(*b)
+                .descriptor_type(vk::DescriptorType::COMBINED_IMAGE_SAMPLER)
+                .image_info(info)
+        })
+        .collect();
+    writes.extend(buffers.iter().zip(&buffer_infos).map(|((b, _), info)| {
+        vk::WriteDescriptorSet::default()
+            .dst_set(set)
+            .dst_binding(*b)
+            .descriptor_type(vk::DescriptorType::STORAGE_BUFFER)
+            .buffer_info(info)
+    }));
+    unsafe { ctx.device.update_descriptor_sets(&writes, &[]) };
 }
 
 const MAIN: &CStr = c"main";
 
 /// Builds a graphics pipeline from `desc`.
 pub fn create(
-    ctx: &Context,
-    layout: vk::PipelineLayout,
+    ctx: &Arc<Context>,
+    layout: &Owned<vk::PipelineLayout>,
     desc: &PipelineDesc<'_>,
-) -> Result<vk::Pipeline> {
+) -> Result<Owned<vk::Pipeline>> {
     let d = &ctx.device;
-    let module = |file: &str| -> Result<vk::ShaderModule> {
-        let code = compile(file)?;
+    // SPIR-V compiled by build.rs; modules live only as long as pipeline creation.
+    let module = |file: &str| -> Result<Owned<vk::ShaderModule>> {
+        let code = spirv(file);
         let m = unsafe {
             d.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&code), None)
         }
         .vk(file)?;
-        ctx.name(m, file);
-        Ok(m)
+        Ok(Owned::new(ctx, m, file))
     };
     let vs = module(desc.vert)?;
-    let fs = module(desc.frag).inspect_err(|_| unsafe { d.destroy_shader_module(vs, None) })?;
+    let fs = module(desc.frag)?;
     let spec_data: Vec<u8> = desc
         .specialization
         .iter()
@@ -225,8 +284,8 @@ pub fn create(
             .specialization_info(&spec)
     };
     let stages = [
-        stage(vk::ShaderStageFlags::VERTEX, vs),
-        stage(vk::ShaderStageFlags::FRAGMENT, fs),
+        stage(vk::ShaderStageFlags::VERTEX, vs.raw()),
+        stage(vk::ShaderStageFlags::FRAGMENT, fs.raw()),
     ];
     let vb = [vk::VertexInputBindingDescription::default()
         .binding(0)
@@ -316,14 +375,9 @@ pub fn create(
         .color_blend_state(&blend)
         .depth_stencil_state(&depth_state)
         .dynamic_state(&dyn_state)
-        .layout(layout)
+        .layout(layout.raw())
         .push_next(&mut rendering);
-    let result = unsafe { d.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) };
-    unsafe {
-        d.destroy_shader_module(vs, None);
-        d.destroy_shader_module(fs, None);
-    }
+    let result = unsafe { d.create_graphics_pipelines(ctx.pipeline_cache(), &[info], None) };
     let p = result.map_err(|(_, e)| e).vk(desc.name)?[0];
-    ctx.name(p, desc.name);
-    Ok(p)
+    Ok(Owned::new(ctx, p, desc.name))
 }

@@ -2,13 +2,16 @@
 //! validation messages) and a pair of timestamp queries (read by `profile`), with the same name.
 
 use super::context::Context;
-use crate::error::{Result, VkContext};
+use super::handle::Owned;
+use crate::error::Result;
+use crate::gpu::error::VkContext;
 use ash::vk;
 use std::ffi::CString;
+use std::sync::Arc;
 
 /// Timestamp queries of one recorded command buffer.
 pub struct Profiler {
-    pool: vk::QueryPool,
+    pool: Option<Owned<vk::QueryPool>>,
     capacity: u32,
     next: u32,
     open: Vec<(String, Option<u32>)>,
@@ -17,7 +20,7 @@ pub struct Profiler {
 
 impl Profiler {
     /// A profiler with room for `scopes` timed scopes per recording.
-    pub fn new(ctx: &Context, scopes: u32) -> Result<Self> {
+    pub fn new(ctx: &Arc<Context>, scopes: u32) -> Result<Self> {
         let capacity = if ctx.info.timestamps { scopes * 2 } else { 0 };
         let pool = if capacity > 0 {
             let p = unsafe {
@@ -29,10 +32,9 @@ impl Profiler {
                 )
             }
             .vk("creating the timestamp query pool")?;
-            ctx.name(p, "antiradiance pass timestamps");
-            p
+            Some(Owned::new(ctx, p, "antiradiance pass timestamps"))
         } else {
-            vk::QueryPool::null()
+            None
         };
         Ok(Self {
             pool,
@@ -48,10 +50,10 @@ impl Profiler {
         self.next = 0;
         self.scopes.clear();
         self.open.clear();
-        if self.capacity > 0 {
+        if let Some(pool) = &self.pool {
             unsafe {
                 ctx.device
-                    .cmd_reset_query_pool(cmd, self.pool, 0, self.capacity)
+                    .cmd_reset_query_pool(cmd, pool.raw(), 0, self.capacity)
             };
         }
     }
@@ -59,16 +61,13 @@ impl Profiler {
     /// Opens a scope: debug label plus a timestamp (if room is left).
     pub fn begin(&mut self, ctx: &Context, cmd: vk::CommandBuffer, name: &str) {
         label_begin(ctx, cmd, name);
-        let q = (self.next + 2 <= self.capacity).then(|| {
+        let pool = self.pool.as_ref().map(|p| p.raw());
+        let q = pool.filter(|_| self.next + 2 <= self.capacity).map(|pool| {
             let q = self.next;
             self.next += 2;
             unsafe {
-                ctx.device.cmd_write_timestamp2(
-                    cmd,
-                    vk::PipelineStageFlags2::ALL_COMMANDS,
-                    self.pool,
-                    q,
-                )
+                ctx.device
+                    .cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, pool, q)
             };
             q
         });
@@ -78,12 +77,12 @@ impl Profiler {
     /// Closes the innermost scope.
     pub fn end(&mut self, ctx: &Context, cmd: vk::CommandBuffer) {
         if let Some((name, q)) = self.open.pop() {
-            if let Some(q) = q {
+            if let (Some(q), Some(pool)) = (q, &self.pool) {
                 unsafe {
                     ctx.device.cmd_write_timestamp2(
                         cmd,
                         vk::PipelineStageFlags2::ALL_COMMANDS,
-                        self.pool,
+                        pool.raw(),
                         q + 1,
                     )
                 };
@@ -96,13 +95,13 @@ impl Profiler {
     /// Durations (ms) of the scopes of the last recording, in the order they closed. Call after
     /// the command buffer has completed.
     pub fn results(&self, ctx: &Context) -> Result<Vec<(String, f64)>> {
-        if self.next == 0 {
+        let Some(pool) = self.pool.as_ref().filter(|_| self.next > 0) else {
             return Ok(Vec::new());
-        }
+        };
         let mut ticks = vec![0u64; self.next as usize];
         unsafe {
             ctx.device.get_query_pool_results(
-                self.pool,
+                pool.raw(),
                 0,
                 &mut ticks,
                 vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
@@ -118,14 +117,6 @@ impl Profiler {
                 (name.clone(), dt as f64 * period * 1e-6)
             })
             .collect())
-    }
-
-    /// Frees the query pool.
-    pub fn destroy(&mut self, ctx: &Context) {
-        if self.pool != vk::QueryPool::null() {
-            unsafe { ctx.device.destroy_query_pool(self.pool, None) };
-            self.pool = vk::QueryPool::null();
-        }
     }
 }
 

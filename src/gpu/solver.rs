@@ -4,13 +4,14 @@
 use super::context::Context;
 use super::diagnostics::BlendRounding;
 use super::layout::{mode, PassConstants, FLAG_HALF};
-use super::memory::Image;
-use super::passes::{self, Pass, Pipelines};
+use super::memory::{Image, MemoryReport};
+use super::pack::{decode, encode};
+use super::passes::{self, Pass, PipelineSpec, SolverPipelines};
 use super::pipelines::Layouts;
 use super::profiler::Profiler;
-use super::range::Range;
-use super::resources::{decode, encode, Images, MemoryReport, Resources};
+use super::resources::{ResourcePlan, Resources, SolverImages};
 use crate::error::{Error, Result};
+use crate::plan::range::Range;
 use crate::plan::Features;
 use crate::scene::{Precision, Scheme};
 use crate::solver::{LocalMode, Table};
@@ -62,7 +63,7 @@ pub struct Fragments {
 /// Images a host application may read (all in `SHADER_READ_ONLY_OPTIMAL` after a recorded
 /// iteration), with the layout that addresses them.
 #[derive(Debug, Clone, Copy)]
-pub struct SolverImages {
+pub struct HostImages {
     /// Leaves' current I_ex.
     pub leaf_ex: (vk::Image, vk::ImageView),
     /// Clusters' I_ex.
@@ -78,7 +79,7 @@ pub struct GpuSolver {
     ctx: Arc<Context>,
     res: Resources,
     layouts: Layouts,
-    pipes: Pipelines,
+    pipes: SolverPipelines,
     profiler: Profiler,
     parity: usize,
     constants: PassConstants,
@@ -96,6 +97,10 @@ impl GpuSolver {
     /// Creates every image, buffer and pipeline `sys` needs and uploads the links and tables.
     pub fn new(ctx: Arc<Context>, sys: &System, opts: GpuOptions) -> Result<Self> {
         let format = super::resources::table_format(opts.precision);
+        let precision = match opts.precision {
+            Precision::F16 => Precision::F16,
+            _ => Precision::F32,
+        };
         let features = opts.features.unwrap_or_else(|| Features::for_system(sys));
         let mut fallbacks = Vec::new();
         let accum_format = if opts.precision == Precision::F16
@@ -110,30 +115,31 @@ impl GpuSolver {
         } else {
             format
         };
-        let mut res = Resources::new(
-            &ctx,
+        let plan = ResourcePlan::new(
             sys,
-            opts.precision,
+            &features,
+            precision,
             accum_format,
             opts.column_height.unwrap_or(u32::MAX),
-            &features,
+            ctx.info.max_image_dimension,
         )?;
         let layouts = Layouts::new(&ctx)?;
-        res.write_sets(&ctx, layouts.set)?;
-        let pipes = Pipelines::new(
-            &ctx,
-            layouts.pipeline,
-            res.format,
-            res.accum_format,
+        let res = Resources::new(&ctx, plan, sys, layouts.set.raw())?;
+        let pipes = SolverPipelines::new(&PipelineSpec {
+            ctx: &ctx,
+            layout: &layouts.pipeline,
+            format,
+            accum_format,
             features,
-        )?;
+        })?;
         let profiler = Profiler::new(&ctx, 1024)?;
+        let layout = *res.layout();
         let constants = PassConstants {
-            bins: res.layout.bins,
-            rows_per_column: res.layout.rows_per_column,
+            bins: layout.bins,
+            rows_per_column: layout.rows_per_column,
             line_offset: ctx.info.line_mode.endpoint_offset(),
             omega: sys.bins.omega as f32,
-            flags: if opts.precision == Precision::F16 {
+            flags: if precision == Precision::F16 {
                 FLAG_HALF
             } else {
                 0
@@ -151,7 +157,7 @@ impl GpuSolver {
             timings: Vec::new(),
             fallbacks,
             sys_range: Range::of(sys, DVec3::ZERO, 0.0),
-            precision: opts.precision,
+            precision,
             environment: DVec3::ZERO,
             direct: None,
             scale: 1.0,
@@ -227,22 +233,11 @@ impl GpuSolver {
         let Some(table) = &self.direct else {
             return Ok(());
         };
-        let l = self.res.layout;
+        let l = *self.res.layout();
         let mut scaled = table.clone();
         scaled.data.iter_mut().for_each(|v| *v *= self.scale);
-        let mut img = self.ctx.create_image(
-            "direct light",
-            l.width(),
-            l.rows_per_column,
-            self.res.format,
-        )?;
-        self.ctx
-            .upload_image(&mut img, &encode(self.res.format, &l.from_table(&scaled)))?;
-        let mut old = std::mem::replace(&mut self.res.images.direct, img);
-        self.ctx.destroy_image(&mut old);
-        self.res.update_set(&self.ctx, 0);
-        self.res.update_set(&self.ctx, 1);
-        Ok(())
+        let bytes = encode(self.res.plan.format, &l.from_table(&scaled));
+        self.res.images.direct.upload(&bytes)
     }
 
     fn update_scale(&mut self) -> Result<()> {
@@ -277,9 +272,15 @@ impl GpuSolver {
     }
 
     fn prepare(&mut self, modes: &[u32]) -> Result<()> {
+        let spec = PipelineSpec {
+            ctx: &self.ctx,
+            layout: &self.layouts.pipeline,
+            format: self.res.plan.format,
+            accum_format: self.res.plan.accum_format,
+            features: self.features,
+        };
         for &m in modes {
-            self.pipes
-                .ensure_local(&self.ctx, self.layouts.pipeline, &self.res, m)?;
+            self.pipes.ensure_local(&spec, &self.res, m)?;
         }
         Ok(())
     }
@@ -325,7 +326,7 @@ impl GpuSolver {
         let p = Pass {
             ctx,
             cmd,
-            layout: layouts.pipeline,
+            layout: layouts.pipeline.raw(),
             pipes,
             set: res.sets[cur],
             constants: *constants,
@@ -339,11 +340,14 @@ impl GpuSolver {
             prof.end(ctx, cmd);
         } else {
             prof.begin(ctx, cmd, "initialize");
-            for img in [&mut res.images.cluster_ex, &mut res.images.i_total] {
-                passes::local::clear(&p, img);
-            }
-            for img in res.images.leaf_ex.iter_mut() {
-                passes::local::clear(&p, img);
+            let im = &mut res.images;
+            for img in [
+                &mut im.cluster_ex,
+                &mut im.i_total,
+                &mut im.leaf_ex0,
+                &mut im.leaf_ex1,
+            ] {
+                passes::clear(&p, img);
             }
             passes::push::clear(&p, res);
             prof.end(ctx, cmd);
@@ -437,36 +441,35 @@ impl GpuSolver {
 
     fn read_texels(
         &mut self,
-        pick: impl FnOnce(&mut Images) -> &mut Image,
+        pick: impl FnOnce(&mut SolverImages<Image>) -> &mut Image,
     ) -> Result<Vec<[f32; 4]>> {
-        let ctx = self.ctx.clone();
         let img = pick(&mut self.res.images);
-        Ok(decode(img.format, &ctx.read_image(img)?))
+        Ok(decode(img.format, &img.read()?))
     }
 
     /// Reads I_ex (leaves + clusters) back as a table.
     pub fn read_i_ex(&mut self) -> Result<Table> {
         let p = self.parity;
-        let leaf = self.read_texels(|im| &mut im.leaf_ex[p])?;
+        let leaf = self.read_texels(|im| im.leaf_ex_mut(p))?;
         let cl = self.read_texels(|im| &mut im.cluster_ex)?;
         let sum: Vec<[f32; 4]> = leaf
             .iter()
             .zip(&cl)
             .map(|(a, b)| [a[0] + b[0], a[1] + b[1], a[2] + b[2], 0.0])
             .collect();
-        Ok(self.unscale(self.res.layout.to_table(&sum)))
+        Ok(self.unscale(self.res.layout().to_table(&sum)))
     }
 
     /// Reads I_total back.
     pub fn read_i_total(&mut self) -> Result<Table> {
         let t = self.read_texels(|im| &mut im.i_total)?;
-        Ok(self.unscale(self.res.layout.to_table(&t)))
+        Ok(self.unscale(self.res.layout().to_table(&t)))
     }
 
     /// Reads the pushed incident radiance back.
     pub fn read_l_push(&mut self) -> Result<Table> {
         let t = self.read_texels(|im| &mut im.l_push)?;
-        Ok(self.unscale(self.res.layout.to_table(&t)))
+        Ok(self.unscale(self.res.layout().to_table(&t)))
     }
 
     fn unscale(&self, mut t: Table) -> Table {
@@ -488,14 +491,14 @@ impl GpuSolver {
     }
 
     /// The images a host application reads.
-    pub fn images(&self) -> SolverImages {
+    pub fn images(&self) -> HostImages {
         let im = &self.res.images;
-        let leaf = &im.leaf_ex[self.parity];
-        SolverImages {
+        let leaf = im.leaf_ex(self.parity);
+        HostImages {
             leaf_ex: (leaf.raw, leaf.view),
             cluster_ex: (im.cluster_ex.raw, im.cluster_ex.view),
             i_total: (im.i_total.raw, im.i_total.view),
-            layout: self.res.layout,
+            layout: *self.res.layout(),
         }
     }
 
@@ -506,8 +509,8 @@ impl GpuSolver {
 
     /// Fragments drawn per propagation by each pass.
     pub fn fragments(&self) -> Fragments {
-        let d = &self.res.draw;
-        let m = self.res.layout.bins as u64;
+        let d = self.res.draw();
+        let m = self.res.layout().bins as u64;
         let leaves: u64 = d.leaf_quads.iter().map(|q| (q.end - q.first) as u64).sum();
         Fragments {
             global: d.global_fragments,
@@ -523,17 +526,13 @@ impl GpuSolver {
 
     /// Links drawn by the global pass.
     pub fn link_count(&self) -> usize {
-        self.res.draw.links.len()
+        self.res.draw().links.len()
     }
 }
 
 impl Drop for GpuSolver {
     fn drop(&mut self) {
-        let ctx = self.ctx.clone();
-        ctx.wait_idle();
-        self.profiler.destroy(&ctx);
-        self.pipes.destroy(&ctx);
-        self.layouts.destroy(&ctx);
-        self.res.destroy(&ctx);
+        // The fields free themselves once the GPU no longer uses them.
+        self.ctx.wait_idle();
     }
 }

@@ -4,13 +4,14 @@
 //! The pass names are listed in the README ("Passes a scene needs").
 
 pub mod occlusion;
+pub mod range;
 pub mod target;
 
 use crate::frame::surfaces::{Surfaces, MODE_SPLAT, MODE_VERTEX};
-use crate::gpu::range::Range;
 use crate::scene::{Precision, Scene};
 use crate::system::System;
 use occlusion::Occlusion;
+use range::Range;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -104,9 +105,9 @@ pub struct Plan {
 }
 
 impl Plan {
-    /// Analyses `scene` (discretized as `sys`, drawn with `surf`) with the table precision it
-    /// asks for.
-    pub fn analyze(scene: &Scene, sys: &System, surf: &Surfaces) -> Self {
+    /// Analyses `scene` (discretized as `sys`, drawn with `surf`) when `requested` table
+    /// precision is asked for.
+    pub fn analyze(scene: &Scene, sys: &System, surf: &Surfaces, requested: Precision) -> Self {
         let mut d = Vec::new();
         let f0 = Features::for_system(sys);
         let antiradiance = match occlusion::analyze(scene) {
@@ -185,12 +186,11 @@ impl Plan {
                 (false, false) => "nothing to draw",
             }
         ));
-        let (precision, why) =
-            Range::of(sys, scene.environment, 0.0).precision(scene.solver.precision);
+        let (precision, why) = Range::of(sys, scene.environment, 0.0).precision(requested);
         d.push(match (precision, why.clone()) {
             (_, Some(why)) => why,
             (Precision::F16, None) => "float16 tables: the dynamic range fits".into(),
-            (Precision::F32, None) => "float32 tables (requested)".into(),
+            (_, None) => "float32 tables (requested)".into(),
         });
         Plan {
             features: Features {
@@ -214,7 +214,7 @@ impl Plan {
     /// Everything on, float32 tables (`--all-passes`); shadow maps for the lights present (a
     /// light type that is absent has nothing to draw).
     pub fn everything(scene: &Scene, sys: &System, surf: &Surfaces) -> Self {
-        let mut p = Self::analyze(scene, sys, surf);
+        let mut p = Self::analyze(scene, sys, surf, Precision::F32);
         p.features = Features::ALL;
         p.precision = Precision::F32;
         p.precision_fallback = None;
@@ -249,12 +249,19 @@ impl Plan {
         p
     }
 
-    /// The plan for a render: [`Plan::everything`] when `all_passes`, else [`Plan::analyze`].
-    pub fn new(scene: &Scene, sys: &System, surf: &Surfaces, all_passes: bool) -> Self {
+    /// The plan for a render: [`Plan::everything`] when `all_passes`, else [`Plan::analyze`]
+    /// with `requested` precision.
+    pub fn new(
+        scene: &Scene,
+        sys: &System,
+        surf: &Surfaces,
+        requested: Precision,
+        all_passes: bool,
+    ) -> Self {
         if all_passes {
             Self::everything(scene, sys, surf)
         } else {
-            Self::analyze(scene, sys, surf)
+            Self::analyze(scene, sys, surf, requested)
         }
     }
 }

@@ -165,14 +165,6 @@ impl TargetChoice {
     }
 }
 
-/// Applies `choice` to `scene`'s solver settings (a fixed iteration count).
-pub fn apply(scene: &mut Scene, choice: &TargetChoice) {
-    scene.solver.bins = choice.bins;
-    scene.solver.element_size = choice.element_size;
-    scene.solver.iterations = choice.iterations;
-    scene.solver.tolerance = None;
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

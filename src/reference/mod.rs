@@ -9,7 +9,7 @@ pub mod sampling;
 use crate::error::{Error, Result};
 use crate::frame::camera::View;
 use crate::frame::Image;
-use crate::render::Progress;
+use crate::progress::Progress;
 use crate::scene::Scene;
 use glam::DVec3;
 use integrator::Tracer;

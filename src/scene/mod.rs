@@ -7,6 +7,7 @@ pub mod load;
 use glam::DVec3;
 use std::path::PathBuf;
 
+pub use crate::settings::{Precision, Scheme};
 pub use load::load_scene;
 
 /// A material: Lambertian `kd` plus a normalized modified-Phong lobe, and optional emission.
@@ -120,25 +121,6 @@ pub struct Camera {
     pub width: u32,
     /// Height in pixels.
     pub height: u32,
-}
-
-/// Iteration scheme of §2.2.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Scheme {
-    /// Alternate radiance and antiradiance propagation (eqs. 13 and 14 in lockstep).
-    Symmetric,
-    /// One radiance step, then several antiradiance steps with radiance frozen (provably converges).
-    Asymmetric,
-}
-
-/// Storage precision of the GPU tables.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Precision {
-    /// R16G16B16A16_SFLOAT (the paper's float16).
-    F16,
-    /// R32G32B32A32_SFLOAT.
-    F32,
 }
 
 /// Solver settings (`[solver]`).

@@ -11,6 +11,7 @@ use std::f64::consts::PI;
 /// Runs the local pass over all leaves, updating `i_ex` (per `mode`) and `i_total`.
 pub fn local(s: &mut CpuSolver<'_>, mode: LocalMode) {
     let sys = s.sys;
+    let s = &mut s.state;
     let m = sys.bins.count;
     let w = sys.bins.omega;
     let (l_push, direct, env) = (&s.l_push, s.direct_in.as_ref(), s.environment);

@@ -61,11 +61,10 @@ pub enum LocalMode {
     Antiradiance,
 }
 
-/// CPU solver state.
+/// The CPU solver's tables and iteration record, without the system they belong to: what an
+/// engine keeps between frames while the system may change (moving objects).
 #[derive(Debug, Clone)]
-pub struct CpuSolver<'a> {
-    /// The discretized scene.
-    pub sys: &'a System,
+pub struct CpuState {
     /// Exitant intensity `I_ex = I_L - I_A` per node and bin.
     pub i_ex: Table,
     /// Incident radiance gathered by the global pass, per node (before push).
@@ -90,13 +89,11 @@ pub struct CpuSolver<'a> {
     pub antiradiance: bool,
 }
 
-impl<'a> CpuSolver<'a> {
-    /// A solver with no light yet; call [`CpuSolver::set_environment`] and/or
-    /// [`CpuSolver::set_direct`] before [`CpuSolver::initialize`].
-    pub fn new(sys: &'a System) -> Self {
+impl CpuState {
+    /// Zero tables for `sys`, no light yet.
+    pub fn new(sys: &System) -> Self {
         let (n, m) = (sys.rows(), sys.bins.count);
         Self {
-            sys,
             i_ex: Table::zeros(n, m),
             l_in: Table::zeros(n, m),
             l_push: Table::zeros(n, m),
@@ -108,6 +105,42 @@ impl<'a> CpuSolver<'a> {
             propagations: 0,
             antiradiance: true,
         }
+    }
+}
+
+/// The CPU solver: a [`CpuState`] operated on with the [`System`] it belongs to. Its fields
+/// are the state's (through `Deref`).
+#[derive(Debug, Clone)]
+pub struct CpuSolver<'a> {
+    /// The discretized scene.
+    pub sys: &'a System,
+    /// Tables and iteration record.
+    pub state: CpuState,
+}
+
+impl std::ops::Deref for CpuSolver<'_> {
+    type Target = CpuState;
+    fn deref(&self) -> &CpuState {
+        &self.state
+    }
+}
+
+impl std::ops::DerefMut for CpuSolver<'_> {
+    fn deref_mut(&mut self) -> &mut CpuState {
+        &mut self.state
+    }
+}
+
+impl<'a> CpuSolver<'a> {
+    /// A solver with no light yet; call [`CpuSolver::set_environment`] and/or
+    /// [`CpuSolver::set_direct`] before [`CpuSolver::initialize`].
+    pub fn new(sys: &'a System) -> Self {
+        Self::resume(sys, CpuState::new(sys))
+    }
+
+    /// Continues from `state` (made for `sys` or a system of the same shape).
+    pub fn resume(sys: &'a System, state: CpuState) -> Self {
+        Self { sys, state }
     }
 
     /// Sets the constant environment radiance (it creates antiradiance, §3.3).
@@ -133,7 +166,7 @@ impl<'a> CpuSolver<'a> {
         self.l_in.data.fill(DVec3::ZERO);
         self.l_push.data.fill(DVec3::ZERO);
         local::local(self, LocalMode::Both);
-        pull::pull(&self.sys.hierarchy, &mut self.i_ex);
+        pull::pull(&self.sys.hierarchy, &mut self.state.i_ex);
         self.residuals.clear();
         self.energies.clear();
         self.propagations = 0;
@@ -141,11 +174,12 @@ impl<'a> CpuSolver<'a> {
 
     /// One propagation: global, push, local (in `mode`), pull.
     pub fn propagate(&mut self, mode: LocalMode) {
-        global::global(self.sys, &self.i_ex, &mut self.l_in);
-        push::push(&self.sys.hierarchy, &self.l_in, &mut self.l_push);
+        let st = &mut self.state;
+        global::global(self.sys, &st.i_ex, &mut st.l_in);
+        push::push(&self.sys.hierarchy, &st.l_in, &mut st.l_push);
         local::local(self, mode);
-        pull::pull(&self.sys.hierarchy, &mut self.i_ex);
-        self.propagations += 1;
+        pull::pull(&self.sys.hierarchy, &mut self.state.i_ex);
+        self.state.propagations += 1;
     }
 
     /// One iteration of `scheme`: symmetric = one propagation updating both hemispheres;
@@ -167,9 +201,10 @@ impl<'a> CpuSolver<'a> {
                 }
             }
         }
-        self.residuals
-            .push(convergence::change(self.sys, &before, &self.i_ex).relative);
-        self.energies.push(self.exitant_flux());
+        let r = convergence::change(self.sys, &before, &self.i_ex).relative;
+        let e = self.exitant_flux();
+        self.residuals.push(r);
+        self.energies.push(e);
     }
 
     /// Initializes and runs `iterations` iterations of `scheme`.

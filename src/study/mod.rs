@@ -7,12 +7,14 @@
 
 pub mod plot;
 
+use crate::engine::{Engine, Options};
 use crate::error::{Error, Result};
 use crate::frame::Image;
 use crate::metrics::{compare, subtract, Metrics};
+use crate::progress::Progress;
 use crate::reference::{render_reference, ReferenceOptions};
-use crate::render::{render_each_iteration, Backend, Progress, RenderOptions};
 use crate::scene::{Precision, Scene, Scheme};
+use crate::settings::BackendKind;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -36,8 +38,9 @@ pub struct StudyOptions {
     /// Seed of the path tracer runs; keep it different from the reference's, or their samples
     /// correlate and the error looks smaller than it is.
     pub seed: u64,
-    /// Backend and device for antiradiance.
-    pub render: RenderOptions,
+    /// Backend, device and any fixed overrides for antiradiance (each run varies one setting
+    /// on top of these).
+    pub render: Options,
 }
 
 impl StudyOptions {
@@ -53,7 +56,7 @@ impl StudyOptions {
             both_precisions: true,
             spp: vec![1, 4, 16, 64, 256],
             seed: 0x5eed_57d1,
-            render: RenderOptions::default(),
+            render: Options::default(),
         }
     }
 }
@@ -161,77 +164,54 @@ impl Truth {
     }
 }
 
-fn scheme_name(s: Scheme) -> &'static str {
-    match s {
-        Scheme::Symmetric => "symmetric",
-        Scheme::Asymmetric => "asymmetric",
-    }
-}
-
-fn precision_name(p: Precision) -> &'static str {
-    match p {
-        Precision::F16 => "f16",
-        Precision::F32 => "f32",
-    }
-}
-
 struct Config {
     family: &'static str,
     label: String,
-    scene: Scene,
+    options: Options,
 }
 
-fn configs(scene: &Scene, o: &StudyOptions) -> Vec<Config> {
-    let base = &scene.solver;
+fn configs(scene: &Scene, o: &StudyOptions) -> Result<Vec<Config>> {
+    let base = o.render.resolve(scene)?.settings;
     let mut out = vec![Config {
         family: "base",
         label: format!(
             "base ({} bins, elem {}, {}, {})",
-            base.bins,
-            base.element_size,
-            scheme_name(base.scheme),
-            precision_name(base.precision)
+            base.bins, base.element_size, base.scheme, base.precision
         ),
-        scene: scene.clone(),
+        options: o.render.clone(),
     }];
-    let mut vary = |family: &'static str, label: String, f: &dyn Fn(&mut Scene)| {
-        let mut s = scene.clone();
-        f(&mut s);
-        if s.solver != scene.solver {
+    let mut vary = |family: &'static str, label: String, f: &dyn Fn(&mut Options)| {
+        let mut options = o.render.clone();
+        f(&mut options);
+        if options.solver.apply(&base) != base {
             out.push(Config {
                 family,
                 label,
-                scene: s,
+                options,
             });
         }
     };
     for &b in &o.bins {
-        vary("bins", format!("{b} bins"), &|s| s.solver.bins = b);
+        vary("bins", format!("{b} bins"), &|r| r.solver.bins = Some(b));
     }
     for &e in &o.element_sizes {
-        vary("element_size", format!("elem {e}"), &|s| {
-            s.solver.element_size = e
+        vary("element_size", format!("elem {e}"), &|r| {
+            r.solver.element_size = Some(e)
         });
     }
     if o.both_schemes {
-        let other = match base.scheme {
-            Scheme::Symmetric => Scheme::Asymmetric,
-            Scheme::Asymmetric => Scheme::Symmetric,
-        };
-        vary("scheme", scheme_name(other).into(), &|s| {
-            s.solver.scheme = other
+        let other = base.scheme.other();
+        vary("scheme", other.to_string(), &|r| {
+            r.solver.scheme = Some(other)
         });
     }
-    if o.both_precisions && o.render.backend == Backend::Gpu {
-        let other = match base.precision {
-            Precision::F16 => Precision::F32,
-            Precision::F32 => Precision::F16,
-        };
-        vary("precision", precision_name(other).into(), &|s| {
-            s.solver.precision = other
+    if o.both_precisions && o.render.backend == BackendKind::Gpu {
+        let other = base.precision.other();
+        vary("precision", other.to_string(), &|r| {
+            r.solver.precision = Some(other)
         });
     }
-    out
+    Ok(out)
 }
 
 fn measure(image: &Image, truth: &Truth) -> Result<(Metrics, Option<Metrics>)> {
@@ -257,23 +237,19 @@ pub fn run(
             "study: --iterations must be at least 1".into(),
         ));
     }
-    let mut scene = scene.clone();
-    scene.camera.width = truth.image.width;
-    scene.camera.height = truth.image.height;
-    scene.solver.iterations = o.iterations;
-    let mut rows = Vec::new();
-    let mut render = o.render.clone();
-    if render.backend == Backend::Gpu && render.context.is_none() {
-        render.context = Some(crate::gpu::Context::headless(
-            &crate::gpu::ContextOptions {
-                validation: render.validation,
-                device_name: render.device.clone(),
-            },
-        )?);
+    let mut o = o.clone();
+    o.render.width = Some(truth.image.width);
+    o.render.height = Some(truth.image.height);
+    o.render.solver.iterations = Some(o.iterations);
+    if o.render.backend == BackendKind::Gpu {
+        o.render.context = Some(crate::engine::context_for(&o.render)?);
     }
-    for c in configs(&scene, o) {
+    let mut rows = Vec::new();
+    for c in configs(scene, &o)? {
         let mut frames = Vec::new();
-        let (stats, _) = render_each_iteration(&c.scene, &render, progress, &mut |f| {
+        let mut engine = Engine::new(scene, &c.options, progress)?;
+        let s = engine.prepared().settings.clone();
+        let (stats, _) = engine.render_each_iteration(progress, &mut |f| {
             let (full, indirect) = measure(&f.image, truth)?;
             frames.push((
                 f.iteration,
@@ -285,7 +261,6 @@ pub fn run(
             Ok(())
         })?;
         for (k, setup_ms, ms, full, indirect) in frames {
-            let s = &c.scene.solver;
             let row = Row {
                 method: "antiradiance",
                 family: c.family.into(),
@@ -293,7 +268,7 @@ pub fn run(
                 bins: Some(stats.bins),
                 element_size: Some(s.element_size),
                 scheme: Some(s.scheme),
-                precision: (render.backend == Backend::Gpu).then_some(s.precision),
+                precision: (o.render.backend == BackendKind::Gpu).then_some(s.precision),
                 iterations: Some(k),
                 spp: None,
                 elements: Some(stats.elements),
@@ -312,6 +287,9 @@ pub fn run(
             rows.push(row);
         }
     }
+    let mut scene = scene.clone();
+    scene.camera.width = truth.image.width;
+    scene.camera.height = truth.image.height;
     for &spp in &o.spp {
         let r = render_reference(
             &scene,
@@ -370,8 +348,8 @@ pub fn csv(rows: &[Row]) -> String {
             r.family,
             opt(r.bins),
             opt(r.element_size),
-            opt(r.scheme.map(scheme_name)),
-            opt(r.precision.map(precision_name)),
+            opt(r.scheme),
+            opt(r.precision),
             opt(r.iterations),
             opt(r.spp),
             opt(r.elements),

@@ -10,16 +10,26 @@ use std::sync::{Arc, OnceLock};
 /// message fails the test that reads it.
 pub fn context() -> Arc<Context> {
     static CTX: OnceLock<Arc<Context>> = OnceLock::new();
-    CTX.get_or_init(|| {
-        let ctx = Context::headless(&ContextOptions {
-            validation: true,
-            device_name: None,
-        })
-        .expect("a Vulkan device (lavapipe: apt-get install mesa-vulkan-drivers)");
-        assert!(ctx.validation_enabled(), "validation layer must be active");
-        ctx
+    CTX.get_or_init(fresh_context).clone()
+}
+
+/// A context of its own, validation on (for a test that hands its device and queue to a second
+/// context, as an embedding host does: the two must not share a queue with other tests).
+pub fn fresh_context() -> Arc<Context> {
+    let ctx = Context::headless(&ContextOptions {
+        validation: true,
+        device_name: None,
+        no_pipeline_cache: false,
     })
-    .clone()
+    .expect("a Vulkan device (lavapipe: apt-get install mesa-vulkan-drivers)");
+    assert!(ctx.validation_enabled(), "validation layer must be active");
+    ctx
+}
+
+/// Asserts that `ctx`'s validation layer has reported nothing.
+pub fn assert_clean(ctx: &Context) {
+    let msgs = ctx.validation_messages();
+    assert!(msgs.is_empty(), "validation errors:\n{}", msgs.join("\n"));
 }
 
 /// Adds a quad `a b c d` (counter-clockwise seen from its front) as two triangles.
@@ -104,4 +114,76 @@ pub fn lamp(s: &mut Scene, half: f64, y: f64, mat: u32) {
         ],
         mat,
     );
+}
+
+/// Renders `scene` with `options` (on the shared validated context for the GPU backend) and
+/// checks what every render must satisfy: validation silent, every pixel and display texel
+/// finite and non-negative, finite residuals. Prints the run's statistics.
+pub fn render_checked(
+    name: &str,
+    scene: &antiradiance::Scene,
+    options: antiradiance::Options,
+) -> antiradiance::engine::Rendered {
+    let gpu = options.backend == antiradiance::BackendKind::Gpu;
+    let ctx = gpu.then(context);
+    let options = antiradiance::Options {
+        context: ctx.clone(),
+        ..options
+    };
+    let backend = options.backend;
+    let r = antiradiance::engine::render(scene, &options, &antiradiance::progress::Silent)
+        .unwrap_or_else(|e| panic!("{name} {backend}: {e}"));
+    if let Some(ctx) = &ctx {
+        assert_clean(ctx);
+    }
+    let bad: Vec<_> = r
+        .image
+        .pixels
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p.iter().any(|v| !v.is_finite() || *v < 0.0))
+        .take(5)
+        .collect();
+    assert!(bad.is_empty(), "{name} {backend}: bad pixels {bad:?}");
+    assert!(
+        r.i_total.data.iter().all(|v| v.is_finite()),
+        "{name} {backend}: non-finite I_total"
+    );
+    assert!(r.stats.residuals.iter().all(|v| v.is_finite()));
+    println!(
+        "{name} {backend}: {} elements, {} links, {} iterations ({} scheme, {} tables), last residual {:.2e}, estimated error {:.2e}, fallbacks {:?}, warnings {:?}",
+        r.stats.elements,
+        r.stats.links,
+        r.stats.iterations,
+        r.stats.scheme,
+        r.stats.precision,
+        r.stats.residuals.last().copied().unwrap_or(0.0),
+        r.stats.estimated_error.unwrap_or(0.0),
+        r.stats.fallbacks,
+        r.stats.warnings
+    );
+    r
+}
+
+/// Points the camera from `eye` at `target` with a square image of `size` pixels.
+pub fn view(s: &mut Scene, eye: DVec3, target: DVec3, fov: f64, size: u32) {
+    s.camera.eye = eye;
+    s.camera.target = target;
+    s.camera.fov_y_deg = fov;
+    s.camera.width = size;
+    s.camera.height = size;
+}
+
+/// [`render_checked`] with `backend` and shadow maps of 128² (the stability suites).
+pub fn render_with(
+    name: &str,
+    scene: &antiradiance::Scene,
+    backend: antiradiance::BackendKind,
+) -> antiradiance::engine::Rendered {
+    let options = antiradiance::Options {
+        backend,
+        shadow_map_size: 128,
+        ..Default::default()
+    };
+    render_checked(name, scene, options)
 }

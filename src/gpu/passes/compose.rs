@@ -2,17 +2,44 @@
 //! the output resolution that normalizes the splat sums, adds emission, direct light with the
 //! shadow maps and the environment, and averages the 2×2 samples.
 
-use super::{begin_rendering, end_rendering, FramePass, Load};
+use super::targets::{FrameImages, RGBA32F};
+use super::{begin_rendering, end_rendering, frame_desc, FramePass, Load};
+use crate::error::Result;
 use crate::gpu::barrier::{transition, Access};
-use crate::gpu::frame::FrameImages;
+use crate::gpu::context::Context;
+use crate::gpu::handle::Owned;
 use crate::gpu::layout::FrameConstants;
+use crate::gpu::memory::Image;
+use crate::gpu::pipelines::{create, Target};
 use ash::vk;
+use std::sync::Arc;
+
+/// The pipeline: a full-screen triangle without vertex input.
+pub fn pipeline(
+    ctx: &Arc<Context>,
+    layout: &Owned<vk::PipelineLayout>,
+    specialization: &[u32],
+) -> Result<Owned<vk::Pipeline>> {
+    let targets = [Target {
+        format: RGBA32F,
+        additive: false,
+        write: true,
+    }];
+    let desc = frame_desc(
+        "compose",
+        "compose.vert",
+        "compose.frag",
+        &targets,
+        specialization,
+    );
+    create(ctx, layout, &desc)
+}
 
 /// Records the compose pass into the output image.
 pub fn record(
     p: &FramePass<'_>,
-    pipeline: vk::Pipeline,
-    im: &mut FrameImages,
+    pipeline: &Owned<vk::Pipeline>,
+    im: &mut FrameImages<Image>,
     mut constants: FrameConstants,
 ) {
     transition(p.ctx, p.cmd, &mut [(&mut im.output, Access::Attachment)]);

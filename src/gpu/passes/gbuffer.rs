@@ -2,19 +2,59 @@
 //! pixel, depth-tested, storing position and leaf (the surface id comes with the leaf) and the
 //! vertex-interpolated indirect radiance of smooth meshes.
 
-use super::{begin_rendering_with_depth, end_rendering, FramePass, Load};
+use super::shadow::POSITION;
+use super::targets::{FrameImages, RGBA32F};
+use super::{begin_rendering_with_depth, end_rendering, frame_desc, FramePass, Load};
+use crate::error::Result;
 use crate::gpu::barrier::{transition, Access};
-use crate::gpu::frame::FrameImages;
-use crate::gpu::layout::FrameConstants;
+use crate::gpu::context::Context;
+use crate::gpu::handle::Owned;
+use crate::gpu::layout::{CornerVertex, FrameConstants};
+use crate::gpu::memory::Image;
+use crate::gpu::pipelines::{create, PipelineDesc, Target};
 use ash::vk;
+use std::sync::Arc;
+
+/// The pipeline: corners with leaf and shared vertex, position (+ vertex radiance when
+/// `vertex`) targets, depth-tested.
+pub fn pipeline(
+    ctx: &Arc<Context>,
+    layout: &Owned<vk::PipelineLayout>,
+    specialization: &[u32],
+    vertex: bool,
+) -> Result<Owned<vk::Pipeline>> {
+    let put = Target {
+        format: RGBA32F,
+        additive: false,
+        write: true,
+    };
+    let targets: &[Target] = if vertex { &[put, put] } else { &[put] };
+    let desc = PipelineDesc {
+        stride: std::mem::size_of::<CornerVertex>() as u32,
+        attributes: &[
+            POSITION,
+            (vk::Format::R32_UINT, 12),
+            (vk::Format::R32_UINT, 16),
+        ],
+        depth: true,
+        ..frame_desc(
+            "gbuffer",
+            "gbuffer.vert",
+            "gbuffer.frag",
+            targets,
+            specialization,
+        )
+    };
+    create(ctx, layout, &desc)
+}
 
 /// Records the G-buffer pass; the vertex-radiance target exists only when `vertex` (smooth
 /// meshes are interpolated).
 #[allow(clippy::too_many_arguments)]
 pub fn record(
     p: &FramePass<'_>,
-    pipeline: vk::Pipeline,
-    im: &mut FrameImages,
+    pipeline: &Owned<vk::Pipeline>,
+    im: &mut FrameImages<Image>,
     corners: vk::Buffer,
     corner_count: u32,
     constants: FrameConstants,

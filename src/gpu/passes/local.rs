@@ -1,17 +1,59 @@
 //! Local pass (eqs. 18–19, §4.2) on the leaf rows: first the diffuse fast path's irradiance
 //! image (one texel per leaf), then reflection + antiradiance into the other image of the I_ex
 //! ping-pong pair and I_total, with the Lambertian runs and the glossy (Phong sum) runs drawn by
-//! their own pipelines.
+//! their own pipelines. One shader (`glsl/local.frag`) is specialized per pipeline.
 
-use super::{begin_rendering, end_rendering, Load, Pass};
+use super::push::quad_desc;
+use super::{begin_rendering, end_rendering, Load, Pass, PipelineSpec};
+use crate::error::Result;
 use crate::gpu::barrier::{transition, Access};
-use crate::gpu::layout::mode;
+use crate::gpu::handle::Owned;
+use crate::gpu::layout::{mode, spec};
+use crate::gpu::pipelines::{create, Target};
 use crate::gpu::profiler::{label_begin, label_end};
 use crate::gpu::resources::Resources;
+use ash::vk;
 
-/// Records the local pass in `m` (a [`mode`] value), reading `leaf_ex[cur]`, writing `leaf_ex[1-cur]`.
+/// The irradiance step's pipeline: one texel per row into the two irradiance images.
+pub fn irradiance_pipeline(s: &PipelineSpec<'_>) -> Result<Owned<vk::Pipeline>> {
+    let targets = [s.put(), s.put()];
+    let constants = spec::values(&s.features, mode::BOTH, false);
+    let desc = quad_desc(
+        "local_irradiance",
+        "local_irradiance.frag",
+        &targets,
+        &constants,
+    );
+    create(s.ctx, s.layout, &desc)
+}
+
+/// The local pass's pipeline for `m` (a [`mode`] value) over Lambertian or glossy runs.
+pub fn pipeline(s: &PipelineSpec<'_>, m: u32, glossy: bool) -> Result<Owned<vk::Pipeline>> {
+    // The antiradiance step leaves I_total as it is: write mask off, attachment loaded.
+    let targets = [
+        s.put(),
+        Target {
+            write: m != mode::ANTIRADIANCE,
+            ..s.put()
+        },
+    ];
+    let kind = if glossy { "glossy" } else { "diffuse" };
+    let names = ["both", "reflect", "antiradiance"];
+    let name = format!("local_{kind} ({})", names[m as usize]);
+    let constants = spec::values(&s.features, m, glossy);
+    create(
+        s.ctx,
+        s.layout,
+        &quad_desc(&name, "local.frag", &targets, &constants),
+    )
+}
+
+/// Records the local pass in `m` (a [`mode`] value), reading `leaf_ex(cur)`, writing
+/// `leaf_ex(1-cur)`.
 pub fn record(p: &Pass<'_>, res: &mut Resources, cur: usize, m: u32) {
     let im = &mut res.images;
+    let draw = &res.plan.draw;
+    let bins = res.plan.layout.bins;
     label_begin(p.ctx, p.cmd, "local_irradiance");
     transition(
         p.ctx,
@@ -33,13 +75,16 @@ pub fn record(p: &Pass<'_>, res: &mut Resources, cur: usize, m: u32) {
             (&im.irradiance_d, Load::Clear),
         ],
     );
-    p.bind(p.pipes.irradiance, im.irradiance_t.extent, 1);
-    p.draw(res.buffers.leaf_quads.raw, 4, res.draw.leaf_quads.len());
+    p.bind(&p.pipes.irradiance, im.irradiance_t.extent, 1);
+    p.draw(res.buffers.leaf_quads.raw, 4, draw.leaf_quads.len());
     end_rendering(p.ctx, p.cmd);
     label_end(p.ctx, p.cmd);
 
-    let [a, b] = &mut im.leaf_ex;
-    let (old, new) = if cur == 0 { (a, b) } else { (b, a) };
+    let (old, new) = if cur == 0 {
+        (&mut im.leaf_ex0, &mut im.leaf_ex1)
+    } else {
+        (&mut im.leaf_ex1, &mut im.leaf_ex0)
+    };
     transition(
         p.ctx,
         p.cmd,
@@ -63,28 +108,27 @@ pub fn record(p: &Pass<'_>, res: &mut Resources, cur: usize, m: u32) {
         &[(&*new, Load::Clear), (&im.i_total, total_load)],
     );
     let extent = new.extent;
-    if let Some(pipe) = p.pipes.diffuse[m as usize] {
-        label_begin(p.ctx, p.cmd, "local_diffuse");
-        p.bind(pipe, extent, res.layout.bins);
-        p.draw(
-            res.buffers.diffuse_quads.raw,
-            4,
-            res.draw.diffuse_quads.len(),
-        );
-        label_end(p.ctx, p.cmd);
+    let runs = [
+        (
+            &p.pipes.diffuse,
+            "local_diffuse",
+            &res.buffers.diffuse_quads,
+            draw.diffuse_quads.len(),
+        ),
+        (
+            &p.pipes.glossy,
+            "local_glossy",
+            &res.buffers.glossy_quads,
+            draw.glossy_quads.len(),
+        ),
+    ];
+    for (pipes, label, buffer, count) in runs {
+        if let Some(pipe) = &pipes[m as usize] {
+            label_begin(p.ctx, p.cmd, label);
+            p.bind(pipe, extent, bins);
+            p.draw(buffer.raw, 4, count);
+            label_end(p.ctx, p.cmd);
+        }
     }
-    if let Some(pipe) = p.pipes.glossy[m as usize] {
-        label_begin(p.ctx, p.cmd, "local_glossy");
-        p.bind(pipe, extent, res.layout.bins);
-        p.draw(res.buffers.glossy_quads.raw, 4, res.draw.glossy_quads.len());
-        label_end(p.ctx, p.cmd);
-    }
-    end_rendering(p.ctx, p.cmd);
-}
-
-/// Clears an image as an attachment (initial state of the ping-pong pair and cluster image).
-pub fn clear(p: &Pass<'_>, img: &mut crate::gpu::memory::Image) {
-    transition(p.ctx, p.cmd, &mut [(&mut *img, Access::Attachment)]);
-    begin_rendering(p.ctx, p.cmd, &[(&*img, Load::Clear)]);
     end_rendering(p.ctx, p.cmd);
 }

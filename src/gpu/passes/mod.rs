@@ -1,6 +1,7 @@
 //! The four operations of §4.2 as raster passes — [`global`], [`push`], [`local`], [`pull`] —
-//! and what they share: the pipelines, attachment load/clear, push constants. The frame passes
-//! (§3.3, §4.3) — [`shadow`], [`gbuffer`], [`splat`], [`compose`] — use [`FramePass`].
+//! and what they share: attachment load/clear, push constants, the [`SolverPipelines`] made
+//! from each pass's own pipeline description. The frame passes (§3.3, §4.3) — [`shadow`],
+//! [`gbuffer`], [`splat`], [`compose`] — use [`FramePass`] and the image set of [`targets`].
 
 pub mod compose;
 pub mod gbuffer;
@@ -10,16 +11,76 @@ pub mod pull;
 pub mod push;
 pub mod shadow;
 pub mod splat;
+pub mod targets;
 
 use super::context::Context;
-use super::layout::{mode, spec, FrameConstants, PassConstants, PullLine, QuadInstance};
+use super::handle::Owned;
+use super::layout::{FrameConstants, PassConstants};
 use super::memory::Image;
-use super::pipelines::{create, PipelineDesc, Target};
+use super::pipelines::Target;
 use super::resources::Resources;
 use crate::error::Result;
+use crate::plan::Features;
 use ash::vk;
+use std::sync::Arc;
 
-/// What a render pass does with an attachment's previous contents.
+/// What a pipeline is made for: device, layout, table formats and the plan's features.
+pub struct PipelineSpec<'a> {
+    /// Device.
+    pub ctx: &'a Arc<Context>,
+    /// Pipeline layout (the solver's or the frame's).
+    pub layout: &'a Owned<vk::PipelineLayout>,
+    /// Table texel format.
+    pub format: vk::Format,
+    /// Format of the additive targets L_in and L_push.
+    pub accum_format: vk::Format,
+    /// What the scene needs (specialization constants).
+    pub features: Features,
+}
+
+impl PipelineSpec<'_> {
+    /// An additive target in the accumulation format (global, push).
+    pub fn accumulate(&self) -> Target {
+        Target {
+            format: self.accum_format,
+            additive: true,
+            write: true,
+        }
+    }
+
+    /// An overwritten target in the table format.
+    pub fn put(&self) -> Target {
+        Target {
+            format: self.format,
+            additive: false,
+            write: true,
+        }
+    }
+}
+
+/// A frame-pass pipeline: triangles, no vertex input, no depth; each pass sets what differs.
+pub fn frame_desc<'a>(
+    name: &'a str,
+    vert: &'a str,
+    frag: &'a str,
+    targets: &'a [Target],
+    specialization: &'a [u32],
+) -> super::pipelines::PipelineDesc<'a> {
+    super::pipelines::PipelineDesc {
+        name,
+        vert,
+        frag,
+        topology: vk::PrimitiveTopology::TRIANGLE_LIST,
+        stride: 0,
+        attributes: &[],
+        targets,
+        specialization,
+        per_vertex: true,
+        depth: false,
+    }
+}
+
+/// What a pass does with an attachment's previous contents.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Load {
     /// Clear to zero (accumulation starts from nothing).
@@ -30,194 +91,62 @@ pub enum Load {
     Keep,
 }
 
-/// The pass pipelines; local variants exist only for the modes and materials in use.
-pub struct Pipelines {
+/// The solver's pipelines; local variants exist only for the modes and materials in use.
+pub struct SolverPipelines {
     /// Global lines, additive into L_in.
-    pub global: vk::Pipeline,
+    pub global: Owned<vk::Pipeline>,
     /// Push quads, additive into L_push.
-    pub push: vk::Pipeline,
+    pub push: Owned<vk::Pipeline>,
     /// Irradiance quads (one texel per row).
-    pub irradiance: vk::Pipeline,
+    pub irradiance: Owned<vk::Pipeline>,
     /// Local pass, Lambertian runs, by mode.
-    pub diffuse: [Option<vk::Pipeline>; 3],
+    pub diffuse: [Option<Owned<vk::Pipeline>>; 3],
     /// Local pass, glossy runs, by mode.
-    pub glossy: [Option<vk::Pipeline>; 3],
+    pub glossy: [Option<Owned<vk::Pipeline>>; 3],
     /// Pull lines, additive into the cluster image.
-    pub pull: vk::Pipeline,
-    format: vk::Format,
-    features: crate::plan::Features,
+    pub pull: Owned<vk::Pipeline>,
 }
 
-const UINT4: vk::Format = vk::Format::R32G32B32A32_UINT;
-
-impl Pipelines {
-    /// Creates the pipelines every solve needs (local variants are added by [`Pipelines::ensure_local`]).
-    pub fn new(
-        ctx: &Context,
-        layout: vk::PipelineLayout,
-        format: vk::Format,
-        accum_format: vk::Format,
-        features: crate::plan::Features,
-    ) -> Result<Self> {
-        let accumulate = [Target {
-            format: accum_format,
-            additive: true,
-            write: true,
-        }];
-        let quad = [(vk::Format::R32G32B32_UINT, 0)];
-        let global = create(
-            ctx,
-            layout,
-            &PipelineDesc {
-                name: "global",
-                vert: "global.vert",
-                frag: "global.frag",
-                topology: vk::PrimitiveTopology::LINE_LIST,
-                stride: std::mem::size_of::<super::layout::GpuLink>() as u32,
-                attributes: &[(UINT4, 0), (vk::Format::R32_SFLOAT, 16)],
-                targets: &accumulate,
-                specialization: &[],
-                per_vertex: false,
-                depth: false,
-            },
-        )?;
-        let push = create(
-            ctx,
-            layout,
-            &PipelineDesc {
-                name: "push",
-                vert: "quad.vert",
-                frag: "push.frag",
-                topology: vk::PrimitiveTopology::TRIANGLE_STRIP,
-                stride: std::mem::size_of::<QuadInstance>() as u32,
-                attributes: &quad,
-                targets: &accumulate,
-                specialization: &[],
-                per_vertex: false,
-                depth: false,
-            },
-        )?;
-        let put = Target {
-            format,
-            additive: false,
-            write: true,
-        };
-        let irradiance = create(
-            ctx,
-            layout,
-            &PipelineDesc {
-                name: "local_irradiance",
-                vert: "quad.vert",
-                frag: "local_irradiance.frag",
-                topology: vk::PrimitiveTopology::TRIANGLE_STRIP,
-                stride: std::mem::size_of::<QuadInstance>() as u32,
-                attributes: &quad,
-                targets: &[put, put],
-                specialization: &spec::values(&features, mode::BOTH, false),
-                per_vertex: false,
-                depth: false,
-            },
-        )?;
-        let pull = create(
-            ctx,
-            layout,
-            &PipelineDesc {
-                name: "pull",
-                vert: "pull.vert",
-                frag: "pull.frag",
-                topology: vk::PrimitiveTopology::LINE_LIST,
-                stride: std::mem::size_of::<PullLine>() as u32,
-                attributes: &[(vk::Format::R32G32_UINT, 0)],
-                targets: &[Target {
-                    format: super::resources::CLUSTER_FORMAT,
-                    additive: true,
-                    write: true,
-                }],
-                specialization: &[],
-                per_vertex: false,
-                depth: false,
-            },
-        )?;
+impl SolverPipelines {
+    /// Creates the pipelines every solve needs (local variants are added by
+    /// [`SolverPipelines::ensure_local`]).
+    pub fn new(spec: &PipelineSpec<'_>) -> Result<Self> {
         Ok(Self {
-            global,
-            push,
-            irradiance,
-            diffuse: [None; 3],
-            glossy: [None; 3],
-            pull,
-            format,
-            features,
+            global: global::pipeline(spec)?,
+            push: push::pipeline(spec)?,
+            irradiance: local::irradiance_pipeline(spec)?,
+            diffuse: [None, None, None],
+            glossy: [None, None, None],
+            pull: pull::pipeline(spec)?,
         })
     }
 
-    /// Creates the local-pass variants for `m` (a [`mode`] value) that `res` will draw.
+    /// Creates the local-pass variants for `mode` (a [`super::layout::mode`] value) that `res`
+    /// will draw.
     pub fn ensure_local(
         &mut self,
-        ctx: &Context,
-        layout: vk::PipelineLayout,
+        spec: &PipelineSpec<'_>,
         res: &Resources,
-        m: u32,
+        mode: u32,
     ) -> Result<()> {
-        let format = self.format;
-        // The antiradiance step leaves I_total as it is: write mask off, attachment loaded.
-        let targets = [
-            Target {
-                format,
-                additive: false,
-                write: true,
-            },
-            Target {
-                format,
-                additive: false,
-                write: m != mode::ANTIRADIANCE,
-            },
-        ];
-        let quad = [(vk::Format::R32G32B32_UINT, 0)];
-        let names = ["both", "reflect", "antiradiance"];
-        let features = self.features;
-        for (glossy, slot) in [
-            (false, &mut self.diffuse[m as usize]),
-            (true, &mut self.glossy[m as usize]),
+        let draw = res.draw();
+        for (glossy, slot, needed) in [
+            (
+                false,
+                &mut self.diffuse[mode as usize],
+                !draw.diffuse_quads.is_empty(),
+            ),
+            (
+                true,
+                &mut self.glossy[mode as usize],
+                !draw.glossy_quads.is_empty(),
+            ),
         ] {
-            let needed = if glossy {
-                !res.draw.glossy_quads.is_empty()
-            } else {
-                !res.draw.diffuse_quads.is_empty()
-            };
-            if slot.is_some() || !needed {
-                continue;
+            if slot.is_none() && needed {
+                *slot = Some(local::pipeline(spec, mode, glossy)?);
             }
-            let kind = if glossy { "glossy" } else { "diffuse" };
-            let name = format!("local_{kind} ({})", names[m as usize]);
-            *slot = Some(create(
-                ctx,
-                layout,
-                &PipelineDesc {
-                    name: &name,
-                    vert: "quad.vert",
-                    frag: "local.frag",
-                    topology: vk::PrimitiveTopology::TRIANGLE_STRIP,
-                    stride: std::mem::size_of::<QuadInstance>() as u32,
-                    attributes: &quad,
-                    targets: &targets,
-                    specialization: &spec::values(&features, m, glossy),
-                    per_vertex: false,
-                    depth: false,
-                },
-            )?);
         }
         Ok(())
-    }
-
-    /// Frees the pipelines.
-    pub fn destroy(&self, ctx: &Context) {
-        let all = [self.global, self.push, self.irradiance, self.pull]
-            .into_iter()
-            .chain(self.diffuse.iter().flatten().copied())
-            .chain(self.glossy.iter().flatten().copied());
-        for p in all {
-            unsafe { ctx.device.destroy_pipeline(p, None) };
-        }
     }
 }
 
@@ -339,7 +268,7 @@ pub struct Pass<'a> {
     /// Pipeline layout.
     pub layout: vk::PipelineLayout,
     /// Pipelines.
-    pub pipes: &'a Pipelines,
+    pub pipes: &'a SolverPipelines,
     /// Descriptor set of the current ping-pong parity.
     pub set: vk::DescriptorSet,
     /// Push constants with the scene-wide fields filled in.
@@ -349,7 +278,7 @@ pub struct Pass<'a> {
 impl Pass<'_> {
     /// Binds `pipeline`, the set and the push constants for a target of `extent` with rows
     /// `quad_width` texels wide.
-    pub fn bind(&self, pipeline: vk::Pipeline, extent: vk::Extent2D, quad_width: u32) {
+    pub fn bind(&self, pipeline: &Owned<vk::Pipeline>, extent: vk::Extent2D, quad_width: u32) {
         let c = PassConstants {
             target_width: extent.width,
             target_height: extent.height,
@@ -361,7 +290,7 @@ impl Pass<'_> {
             self.cmd,
             self.layout,
             self.set,
-            pipeline,
+            pipeline.raw(),
             super::layout::as_bytes(std::slice::from_ref(&c)),
         );
     }
@@ -396,13 +325,13 @@ pub struct FramePass<'a> {
 
 impl FramePass<'_> {
     /// Binds `pipeline`, the frame set and `constants`.
-    pub fn bind(&self, pipeline: vk::Pipeline, constants: &FrameConstants) {
+    pub fn bind(&self, pipeline: &Owned<vk::Pipeline>, constants: &FrameConstants) {
         bind_with_constants(
             self.ctx,
             self.cmd,
             self.layout,
             self.set,
-            pipeline,
+            pipeline.raw(),
             super::layout::as_bytes(std::slice::from_ref(constants)),
         );
     }
@@ -436,4 +365,12 @@ impl FramePass<'_> {
                 .cmd_draw(self.cmd, vertices, instances, 0, 0);
         }
     }
+}
+
+/// Clears an image as an attachment (initial states: the ping-pong pair, cluster image, L_push).
+pub fn clear(p: &Pass<'_>, img: &mut Image) {
+    use super::barrier::{transition, Access};
+    transition(p.ctx, p.cmd, &mut [(&mut *img, Access::Attachment)]);
+    begin_rendering(p.ctx, p.cmd, &[(&*img, Load::Clear)]);
+    end_rendering(p.ctx, p.cmd);
 }

@@ -1,19 +1,54 @@
 //! Shadow maps (§3.3): every element corner drawn once per light view, each view into its own
 //! band of one R32F image, keeping the nearest linear distance (depth-tested).
 
-use super::{begin_rendering_with_depth, end_rendering, FramePass, Load};
+use super::targets::FrameImages;
+use super::{begin_rendering_with_depth, end_rendering, frame_desc, FramePass, Load};
+use crate::error::Result;
 use crate::frame::shadow::EMPTY;
 use crate::gpu::barrier::{transition, Access};
-use crate::gpu::frame::FrameImages;
-use crate::gpu::layout::FrameConstants;
+use crate::gpu::context::Context;
+use crate::gpu::handle::Owned;
+use crate::gpu::layout::{CornerVertex, FrameConstants};
+use crate::gpu::memory::Image;
+use crate::gpu::pipelines::{create, PipelineDesc, Target};
 use ash::vk;
+use std::sync::Arc;
+
+/// Corner positions as vertex input (the shadow and G-buffer passes).
+pub const POSITION: (vk::Format, u32) = (vk::Format::R32G32B32_SFLOAT, 0);
+
+/// The pipeline: corners as triangles, nearest linear distance per texel (depth-tested).
+pub fn pipeline(
+    ctx: &Arc<Context>,
+    layout: &Owned<vk::PipelineLayout>,
+    specialization: &[u32],
+) -> Result<Owned<vk::Pipeline>> {
+    let targets = [Target {
+        format: vk::Format::R32_SFLOAT,
+        additive: false,
+        write: true,
+    }];
+    let desc = PipelineDesc {
+        stride: std::mem::size_of::<CornerVertex>() as u32,
+        attributes: &[POSITION],
+        depth: true,
+        ..frame_desc(
+            "shadow",
+            "shadow.vert",
+            "shadow.frag",
+            &targets,
+            specialization,
+        )
+    };
+    create(ctx, layout, &desc)
+}
 
 /// Records all `views` views of side `size`.
 #[allow(clippy::too_many_arguments)]
 pub fn record(
     p: &FramePass<'_>,
-    pipeline: vk::Pipeline,
-    im: &mut FrameImages,
+    pipeline: &Owned<vk::Pipeline>,
+    im: &mut FrameImages<Image>,
     corners: vk::Buffer,
     corner_count: u32,
     views: u32,

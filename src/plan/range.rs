@@ -134,7 +134,7 @@ impl Range {
     pub fn overflow_limit(precision: Precision, scale: f64) -> f64 {
         match precision {
             Precision::F16 => 0.5 * F16_MAX / scale,
-            Precision::F32 => f64::MAX,
+            Precision::F32 | Precision::F64 => f64::MAX,
         }
     }
 }

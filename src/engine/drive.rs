@@ -3,32 +3,12 @@
 //! scheme growing (restart with the asymmetric one), float16 overflowing (restart in float32),
 //! both schemes growing (keep the iterate before growth). Nothing non-finite is handed on.
 
-use super::Progress;
+use super::backend::Backend;
+use super::prepared::Prepared;
 use crate::error::{Error, Result};
-use crate::frame::Image;
-use crate::scene::{Scheme, SolverSettings};
+use crate::progress::Progress;
+use crate::scene::Scheme;
 use crate::solver::convergence::{change, exitant_flux, max_abs, Monitor, Verdict};
-use crate::solver::Table;
-use crate::system::System;
-use std::collections::BTreeMap;
-
-/// A solver and its frame drawing, as the loop sees them.
-pub(crate) trait Iterative {
-    /// The initial state (emission, environment, direct light; no propagation).
-    fn initialize(&mut self) -> Result<()>;
-    /// One iteration of `scheme`.
-    fn iterate(&mut self, scheme: Scheme, antiradiance_steps: usize) -> Result<()>;
-    /// The current I_ex (unscaled).
-    fn i_ex(&mut self) -> Result<Table>;
-    /// Largest |I_ex| before the table format overflows (infinite for f64/f32).
-    fn overflow_limit(&self) -> f64;
-    /// Switches to wider tables (float32) and says so, or `None` when already as wide as it gets.
-    fn widen(&mut self) -> Result<Option<String>>;
-    /// Draws the frame of the current state.
-    fn draw(&mut self) -> Result<Image>;
-    /// Adds the pass timings since the last call to `passes`.
-    fn timings(&mut self, passes: &mut BTreeMap<String, f64>);
-}
 
 /// What the loop did.
 #[derive(Debug, Clone, Default)]
@@ -47,17 +27,20 @@ pub(crate) struct Outcome {
     pub estimated_error: Option<f64>,
 }
 
-/// Iterates `solver` per `settings`. `frame(k, solver)` is called for the frames wanted: after
-/// every iteration when `every_iteration`, else only for the result; `k` counts the iterations
-/// of the current run (a restart begins again at 0 and says so in the fallbacks).
+/// Iterates `solver` per `prep.settings`. `initialized()` is called once, after the first
+/// initial state; `frame(k, solver)` is called for the frames wanted: after every iteration
+/// when `every_iteration`, else only for the result; `k` counts the iterations of the current
+/// run (a restart begins again at 0 and says so in the fallbacks).
 pub(crate) fn drive(
-    sys: &System,
-    settings: &SolverSettings,
-    solver: &mut dyn Iterative,
+    prep: &Prepared,
+    solver: &mut dyn Backend,
     every_iteration: bool,
     progress: &dyn Progress,
-    frame: &mut dyn FnMut(usize, &mut dyn Iterative) -> Result<()>,
+    initialized: &mut dyn FnMut(),
+    frame: &mut dyn FnMut(usize, &mut dyn Backend) -> Result<()>,
 ) -> Result<Outcome> {
+    let (sys, settings) = (&prep.system, &prep.settings);
+    let mut first = true;
     let mut out = Outcome::default();
     let mut scheme = settings.scheme;
     let mut monitor = Monitor::new(settings);
@@ -65,7 +48,10 @@ pub(crate) fn drive(
     let mut replay: Option<usize> = None;
     progress.begin("iterations", monitor.limit as u64);
     'run: loop {
-        solver.initialize()?;
+        solver.initialize(prep)?;
+        if std::mem::take(&mut first) {
+            initialized();
+        }
         let mut before = solver.i_ex()?;
         monitor.restart();
         if monitor.limit == 0 || replay == Some(0) {
@@ -73,12 +59,12 @@ pub(crate) fn drive(
             break;
         }
         for k in 1.. {
-            solver.iterate(scheme, settings.antiradiance_steps)?;
+            solver.iterate(prep, scheme, settings.antiradiance_steps)?;
             let after = solver.i_ex()?;
             let peak = max_abs(&after);
             let limit = solver.overflow_limit();
             if peak > limit {
-                if let Some(wider) = solver.widen()? {
+                if let Some(wider) = solver.widen(prep)? {
                     out.fallbacks.push(format!(
                         "float16 tables overflow at iteration {k} (largest |I_ex| {peak:.3e}, limit {limit:.3e} at this scale); {wider}; restarted"
                     ));

@@ -1,0 +1,239 @@
+//! The command line: clap definitions and their translation into library options. Flags become
+//! [`Options`]; nothing is written into the scene.
+
+use antiradiance::engine::{Options, SolverOverrides};
+use antiradiance::{BackendKind, Precision, Scheme};
+use clap::{Args, Parser, Subcommand};
+use std::path::PathBuf;
+
+/// `antiradiance`: global illumination with implicit visibility and antiradiance.
+#[derive(Parser)]
+#[command(
+    name = "antiradiance",
+    version,
+    about = "Global illumination with implicit visibility and antiradiance"
+)]
+pub struct Cli {
+    /// The command.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The commands.
+#[derive(Subcommand)]
+pub enum Command {
+    /// Scene statistics: triangles, elements, links, bins, memory, linking time.
+    Info {
+        /// Scene TOML (default: the bundled Cornell box).
+        scene: Option<PathBuf>,
+        /// Print JSON instead of text.
+        #[arg(long)]
+        json: bool,
+        #[command(flatten)]
+        plan: PlanArgs,
+    },
+    /// Render the scene from its camera to PNG and/or EXR (default: out.png).
+    Render {
+        /// Scene TOML (default: the bundled Cornell box).
+        scene: Option<PathBuf>,
+        /// PNG output (tone-mapped sRGB); written when given, or when no --exr is given.
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// EXR output (linear float RGB radiance).
+        #[arg(long)]
+        exr: Option<PathBuf>,
+        /// Write statistics as JSON to this file.
+        #[arg(long)]
+        json: Option<PathBuf>,
+        #[command(flatten)]
+        solver: SolverArgs,
+        /// Iterate until the estimated error is below this instead of a fixed count.
+        #[arg(long)]
+        tolerance: Option<f64>,
+        /// Iteration cap with --tolerance (default: `solver.max_iterations`, 1000).
+        #[arg(long)]
+        max_iterations: Option<usize>,
+        #[command(flatten)]
+        size: SizeArgs,
+        /// PNG exposure in stops (pixel values are multiplied by 2^exposure).
+        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+        exposure: f64,
+        /// Which implementation solves and draws.
+        #[arg(long, value_enum, default_value_t = BackendKind::Gpu)]
+        backend: BackendKind,
+        /// Shadow map side in texels.
+        #[arg(long, default_value_t = 1024)]
+        shadow_map_size: u32,
+        /// Vulkan device whose name contains this (default: prefer a discrete GPU).
+        #[arg(long)]
+        device: Option<String>,
+        #[command(flatten)]
+        plan: PlanArgs,
+    },
+    /// Path-traced ground truth (unbiased, CPU, all cores) to EXR, with its direct part and
+    /// per-pixel standard error beside it (REF.direct.exr, REF.stderr.exr).
+    Reference {
+        /// Scene TOML (default: the bundled Cornell box).
+        scene: Option<PathBuf>,
+        /// Samples per pixel.
+        #[arg(long, default_value_t = 256)]
+        spp: u32,
+        /// EXR output (linear float RGB radiance).
+        #[arg(long, default_value = "reference.exr")]
+        exr: PathBuf,
+        /// Reflections per path (default: unlimited, ended by Russian roulette without bias).
+        #[arg(long)]
+        max_bounces: Option<u32>,
+        /// Seed: the same seed gives the same image on any number of threads.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        #[command(flatten)]
+        size: SizeArgs,
+        /// Also write a PNG (exposure in stops via --exposure).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// PNG exposure in stops.
+        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+        exposure: f64,
+        /// Write the convergence figures as JSON to this file.
+        #[arg(long)]
+        json: Option<PathBuf>,
+    },
+    /// Error against run time: antiradiance over a sweep of settings and the path tracer at
+    /// increasing spp, measured against a reference; writes study.csv, error-vs-time.png and
+    /// convergence.png into --out.
+    Study {
+        /// Scene TOML (default: the bundled Cornell box).
+        scene: Option<PathBuf>,
+        /// Reference EXR from `antiradiance reference` (its REF.direct.exr, when present, gives
+        /// the indirect-only error). The study renders at the reference's size.
+        #[arg(long)]
+        reference: PathBuf,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+        /// Antiradiance is measured after every iteration 1..=N.
+        #[arg(long, default_value_t = 16)]
+        iterations: usize,
+        /// Bin counts to try, comma-separated (default 32,64,128,256,512).
+        #[arg(long, value_delimiter = ',')]
+        bins: Option<Vec<usize>>,
+        /// Element sizes to try, comma-separated (default: the scene's ×2, ×1, ×0.5).
+        #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+        element_sizes: Option<Vec<f64>>,
+        /// Path tracer sample counts, comma-separated (default 1,4,16,64,256).
+        #[arg(long, value_delimiter = ',')]
+        spp: Option<Vec<u32>>,
+        /// Skip the run with the other iteration scheme.
+        #[arg(long)]
+        one_scheme: bool,
+        /// Skip the run with the other precision.
+        #[arg(long)]
+        one_precision: bool,
+        /// Which implementation runs antiradiance.
+        #[arg(long, value_enum, default_value_t = BackendKind::Gpu)]
+        backend: BackendKind,
+        /// Vulkan device whose name contains this.
+        #[arg(long)]
+        device: Option<String>,
+    },
+    /// Error metrics of one EXR against a reference EXR (e.g. a Mitsuba 3 render).
+    Compare {
+        /// Image to measure.
+        test: PathBuf,
+        /// Reference image.
+        reference: PathBuf,
+        /// Write a difference picture (red: brighter, blue: darker; full at ±50%).
+        #[arg(long)]
+        diff: Option<PathBuf>,
+    },
+    /// Time the GPU passes (global, push, local, pull) per frame, like the paper's Table 2.
+    Profile {
+        /// Scene TOML (default: the bundled Cornell box).
+        scene: Option<PathBuf>,
+        /// Frames to time after warm-up.
+        #[arg(long, default_value_t = 10)]
+        frames: usize,
+        /// Untimed warm-up frames.
+        #[arg(long, default_value_t = 2)]
+        warmup: usize,
+        /// Override `solver.bins`.
+        #[arg(long)]
+        bins: Option<usize>,
+        /// Override `solver.precision`.
+        #[arg(long, value_enum)]
+        precision: Option<Precision>,
+        /// Write the report as JSON to this file.
+        #[arg(long)]
+        json: Option<PathBuf>,
+        /// Vulkan device whose name contains this (default: prefer a discrete GPU).
+        #[arg(long)]
+        device: Option<String>,
+        #[command(flatten)]
+        plan: PlanArgs,
+    },
+}
+
+/// Solver settings that replace the scene's.
+#[derive(Args)]
+pub struct SolverArgs {
+    /// Override `solver.bins`.
+    #[arg(long)]
+    pub bins: Option<usize>,
+    /// Override `solver.iterations` (0: direct light and emission only).
+    #[arg(long)]
+    pub iterations: Option<usize>,
+    /// Override `solver.scheme`.
+    #[arg(long, value_enum)]
+    pub scheme: Option<Scheme>,
+    /// Override `solver.precision`.
+    #[arg(long, value_enum)]
+    pub precision: Option<Precision>,
+}
+
+impl SolverArgs {
+    /// The overrides these flags give.
+    pub fn overrides(&self) -> SolverOverrides {
+        SolverOverrides {
+            bins: self.bins,
+            iterations: self.iterations,
+            scheme: self.scheme,
+            precision: self.precision,
+            ..Default::default()
+        }
+    }
+}
+
+/// Image size overrides.
+#[derive(Args)]
+pub struct SizeArgs {
+    /// Override `camera.width`.
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Override `camera.height`.
+    #[arg(long)]
+    pub height: Option<u32>,
+}
+
+/// What runs: the scene analysis' plan unless forced, and settings chosen for an error target.
+#[derive(Args)]
+pub struct PlanArgs {
+    /// Run every pass and create every table (float32) whether the scene needs it or not.
+    #[arg(long)]
+    pub all_passes: bool,
+    /// Choose bins, element size and iterations for this relative RMSE from measured
+    /// error-vs-time data (replaces the scene's and --bins/--iterations).
+    #[arg(long)]
+    pub target_error: Option<f64>,
+}
+
+impl PlanArgs {
+    /// Options with these flags, everything else default.
+    pub fn options(&self) -> Options {
+        Options {
+            all_passes: self.all_passes,
+            target_error: self.target_error,
+            ..Options::default()
+        }
+    }
+}

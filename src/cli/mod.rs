@@ -1,0 +1,4 @@
+//! The binary's parts: argument definitions and progress bars.
+
+pub mod args;
+pub mod progress;

@@ -1,0 +1,67 @@
+//! The one public trait both backends implement, and the one factory that makes them: the f64
+//! CPU solver with a ray-cast frame ([`super::cpu::CpuBackend`]), and the Vulkan raster passes
+//! with their raster frame ([`super::gpu::GpuBackend`]). The engine drives either the same way.
+
+use super::prepared::Prepared;
+use crate::error::Result;
+use crate::frame::Image;
+use crate::gpu::memory::MemoryReport;
+use crate::gpu::Context;
+use crate::scene::{Precision, Scheme};
+use crate::settings::BackendKind;
+use crate::solver::Table;
+use std::sync::Arc;
+
+/// A solver and its frame drawing, as the engine sees them.
+pub trait Backend {
+    /// Which backend this is.
+    fn kind(&self) -> BackendKind;
+    /// The device it runs on (`cpu` or the Vulkan device name).
+    fn device(&self) -> String;
+    /// Shadow maps for the scene's lights (into `prep.maps`), the leaves' direct light from
+    /// them, and the environment: everything the initial state is made from.
+    fn prepare_lights(&mut self, prep: &mut Prepared) -> Result<()>;
+    /// The initial state (emission, environment, direct light; no propagation).
+    fn initialize(&mut self, prep: &Prepared) -> Result<()>;
+    /// One iteration of `scheme` with `antiradiance_steps` (asymmetric).
+    fn iterate(&mut self, prep: &Prepared, scheme: Scheme, antiradiance_steps: usize)
+        -> Result<()>;
+    /// The current I_ex (unscaled).
+    fn i_ex(&mut self) -> Result<Table>;
+    /// The current display intensity I_total (unscaled).
+    fn i_total(&mut self) -> Result<Table>;
+    /// Largest |I_ex| before the table format overflows (infinite for f64/f32).
+    fn overflow_limit(&self) -> f64;
+    /// Switches to wider tables (float32) and says so, or `None` when already as wide as it gets.
+    fn widen(&mut self, prep: &Prepared) -> Result<Option<String>>;
+    /// Draws the frame of the current state from `prep.camera`.
+    fn draw(&mut self, prep: &Prepared) -> Result<Image>;
+    /// Pass timings (ms, in order) since the last call.
+    fn take_timings(&mut self) -> Vec<(String, f64)>;
+    /// Precision of the tables now.
+    fn precision(&self) -> Precision;
+    /// Departures from the requested configuration made when the backend was set up.
+    fn fallbacks(&self) -> Vec<String>;
+    /// GPU memory by purpose (empty for the CPU backend).
+    fn memory(&self) -> MemoryReport;
+    /// The GPU backend, for recording into a host's command buffers.
+    fn as_gpu(&mut self) -> Option<&mut super::gpu::GpuBackend>;
+}
+
+/// Makes the backend `kind` for `prep`; the GPU backend uses `ctx`.
+pub fn create(
+    kind: BackendKind,
+    prep: &Prepared,
+    ctx: Option<Arc<Context>>,
+    tuning: super::GpuTuning,
+) -> Result<Box<dyn Backend>> {
+    Ok(match kind {
+        BackendKind::Cpu => Box::new(super::cpu::CpuBackend::new(prep)),
+        BackendKind::Gpu => {
+            let ctx = ctx.ok_or_else(|| {
+                crate::error::Error::Device("the GPU backend needs a Vulkan context".into())
+            })?;
+            Box::new(super::gpu::GpuBackend::new(ctx, prep, tuning)?)
+        }
+    })
+}

@@ -1,0 +1,150 @@
+//! The CPU backend: the f64 solver (the specification the GPU must equal) and a ray-cast frame.
+
+use super::backend::Backend;
+use super::prepared::Prepared;
+use crate::error::Result;
+use crate::frame::lights::direct_in_table;
+use crate::frame::{cpu, Image};
+use crate::gpu::memory::MemoryReport;
+use crate::raycast::RayCaster;
+use crate::scene::{Precision, Scheme};
+use crate::settings::BackendKind;
+use crate::solver::{CpuSolver, CpuState, Table};
+use std::time::Instant;
+
+fn ms(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+/// The f64 solver's state and the ray caster of the frame and shadow maps.
+pub struct CpuBackend {
+    state: Option<CpuState>,
+    caster: RayCaster,
+    timings: Vec<(String, f64)>,
+}
+
+impl CpuBackend {
+    /// A backend for `prep` (builds the ray caster over its elements).
+    pub fn new(prep: &Prepared) -> Self {
+        let mut state = CpuState::new(&prep.system);
+        state.antiradiance = prep.plan.features.antiradiance;
+        Self {
+            state: Some(state),
+            caster: RayCaster::new(&prep.system),
+            timings: Vec::new(),
+        }
+    }
+
+    /// Runs `f` on a solver over `prep`'s system with this backend's state.
+    fn with_solver<T>(&mut self, prep: &Prepared, f: impl FnOnce(&mut CpuSolver<'_>) -> T) -> T {
+        let state = self
+            .state
+            .take()
+            .expect("the state is put back after every use");
+        let mut solver = CpuSolver::resume(&prep.system, state);
+        let out = f(&mut solver);
+        self.state = Some(solver.state);
+        out
+    }
+
+    fn state(&self) -> &CpuState {
+        self.state
+            .as_ref()
+            .expect("the state is put back after every use")
+    }
+
+    fn time(&mut self, name: &str, t: Instant) {
+        self.timings.push((name.to_string(), ms(t)));
+    }
+}
+
+impl Backend for CpuBackend {
+    fn kind(&self) -> BackendKind {
+        BackendKind::Cpu
+    }
+
+    fn device(&self) -> String {
+        "cpu".into()
+    }
+
+    fn prepare_lights(&mut self, prep: &mut Prepared) -> Result<()> {
+        let t = Instant::now();
+        if !prep.maps.views.is_empty() {
+            prep.maps.render_cpu(&self.caster);
+        }
+        self.time("shadow", t);
+        let t = Instant::now();
+        let direct = (!prep.scene.lights.is_empty())
+            .then(|| direct_in_table(&prep.system, &prep.scene.lights, &prep.maps));
+        let state = self.state.as_mut().expect("state present");
+        state.environment = prep.scene.environment;
+        state.direct_in = direct;
+        self.time("direct", t);
+        Ok(())
+    }
+
+    fn initialize(&mut self, prep: &Prepared) -> Result<()> {
+        let t = Instant::now();
+        self.with_solver(prep, |s| s.initialize());
+        self.time("solve", t);
+        Ok(())
+    }
+
+    fn iterate(&mut self, prep: &Prepared, scheme: Scheme, steps: usize) -> Result<()> {
+        let t = Instant::now();
+        self.with_solver(prep, |s| s.iterate(scheme, steps));
+        self.time("solve", t);
+        Ok(())
+    }
+
+    fn i_ex(&mut self) -> Result<Table> {
+        Ok(self.state().i_ex.clone())
+    }
+
+    fn i_total(&mut self) -> Result<Table> {
+        Ok(self.state().i_total.clone())
+    }
+
+    fn overflow_limit(&self) -> f64 {
+        f64::MAX
+    }
+
+    fn widen(&mut self, _: &Prepared) -> Result<Option<String>> {
+        Ok(None)
+    }
+
+    fn draw(&mut self, prep: &Prepared) -> Result<Image> {
+        let t = Instant::now();
+        let image = cpu::render(
+            &prep.scene,
+            &prep.camera,
+            &prep.system,
+            &self.state().i_total,
+            &prep.maps,
+            &prep.surfaces,
+            &self.caster,
+        );
+        self.time("frame", t);
+        Ok(image)
+    }
+
+    fn take_timings(&mut self) -> Vec<(String, f64)> {
+        std::mem::take(&mut self.timings)
+    }
+
+    fn precision(&self) -> Precision {
+        Precision::F64
+    }
+
+    fn fallbacks(&self) -> Vec<String> {
+        Vec::new()
+    }
+
+    fn memory(&self) -> MemoryReport {
+        MemoryReport::default()
+    }
+
+    fn as_gpu(&mut self) -> Option<&mut super::gpu::GpuBackend> {
+        None
+    }
+}

@@ -1,0 +1,345 @@
+//! The engine: one long-lived object that owns a prepared scene and one backend, and that every
+//! command, the tests and an embedding host drive the same way. A frame is: update what moved
+//! ([`Engine::new`] prepares the lights; moving scenes will update them between frames), iterate
+//! ([`Engine::initialize`], [`Engine::iterate`], or [`Engine::render`] with the convergence
+//! monitor and its fallbacks), draw ([`Engine::draw`]). A host that owns the Vulkan device records
+//! the same steps into its own command buffers ([`Engine::record_initialize`],
+//! [`Engine::record_iterations`], [`Engine::record_draw`]).
+
+pub mod backend;
+pub mod cpu;
+mod drive;
+pub mod gpu;
+pub mod options;
+pub mod prepared;
+pub mod stats;
+
+pub use backend::Backend;
+pub use options::{GpuTuning, Options, SolverOverrides};
+pub use prepared::Prepared;
+pub use stats::{IterationFrame, RenderStats, Rendered};
+
+use crate::error::{Error, Result};
+use crate::frame::Image;
+use crate::gpu::memory::MemoryReport;
+use crate::gpu::solver::Fragments;
+use crate::gpu::{Context, ContextOptions};
+use crate::progress::Progress;
+use crate::scene::{Precision, Scene};
+use crate::settings::BackendKind;
+use crate::solver::Table;
+use ash::vk;
+use std::cell::Cell;
+use std::collections::BTreeMap;
+use std::sync::Arc;
+use std::time::Instant;
+
+fn ms(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+/// A prepared scene and the backend that solves and draws it.
+pub struct Engine {
+    prep: Prepared,
+    backend: Box<dyn Backend>,
+    fallbacks: Vec<String>,
+    /// When the engine was asked for (start of the first render's `total_ms`).
+    created: Option<Instant>,
+    /// When the backend's setup began (start of the first render's `setup_ms`).
+    setup_start: Option<Instant>,
+}
+
+/// The Vulkan context `options` ask for: the host's, or a new headless one.
+pub fn context_for(options: &Options) -> Result<Arc<Context>> {
+    match &options.context {
+        Some(c) => Ok(c.clone()),
+        None => Context::headless(&ContextOptions {
+            validation: options.validation,
+            device_name: options.device.clone(),
+            no_pipeline_cache: false,
+        }),
+    }
+}
+
+impl Engine {
+    /// Prepares `scene` with `options` (on the GPU backend the device comes first: its memory
+    /// bounds the discretization before linking), creates the backend and prepares the lights
+    /// (shadow maps, direct light, environment). Then [`Engine::initialize`] or
+    /// [`Engine::render`].
+    pub fn new(scene: &Scene, options: &Options, progress: &dyn Progress) -> Result<Self> {
+        let created = Instant::now();
+        let ctx = match options.backend {
+            BackendKind::Cpu => None,
+            BackendKind::Gpu => Some(context_for(options)?),
+        };
+        let memory = ctx.as_ref().map(|c| c.info.device_local_bytes);
+        let prep = Prepared::new(scene, options, memory, progress)?;
+        let mut engine = Self::with_context(prep, options, ctx, progress)?;
+        engine.created = Some(created);
+        Ok(engine)
+    }
+
+    /// An engine for an already prepared scene (e.g. [`Prepared::with_every_pass`]); the GPU
+    /// backend uses `options.context` or a new headless context.
+    pub fn from_prepared(
+        prep: Prepared,
+        options: &Options,
+        progress: &dyn Progress,
+    ) -> Result<Self> {
+        let ctx = match options.backend {
+            BackendKind::Cpu => None,
+            BackendKind::Gpu => Some(context_for(options)?),
+        };
+        Self::with_context(prep, options, ctx, progress)
+    }
+
+    fn with_context(
+        mut prep: Prepared,
+        options: &Options,
+        ctx: Option<Arc<Context>>,
+        progress: &dyn Progress,
+    ) -> Result<Self> {
+        let setup_start = Instant::now();
+        let mut backend = backend::create(options.backend, &prep, ctx, options.gpu)?;
+        let mut fallbacks = prep.fallbacks.clone();
+        if options.backend == BackendKind::Gpu {
+            fallbacks.extend(prep.plan.precision_fallback.clone());
+        }
+        fallbacks.extend(backend.fallbacks());
+        let lights = !prep.maps.views.is_empty();
+        if lights {
+            progress.begin("shadow maps", 1);
+        }
+        backend.prepare_lights(&mut prep)?;
+        if lights {
+            progress.end();
+        }
+        Ok(Self {
+            prep,
+            backend,
+            fallbacks,
+            created: Some(setup_start),
+            setup_start: Some(setup_start),
+        })
+    }
+
+    /// The prepared scene: settings, camera, system, plan, surfaces, shadow maps.
+    pub fn prepared(&self) -> &Prepared {
+        &self.prep
+    }
+
+    /// Which backend solves and draws.
+    pub fn backend_kind(&self) -> BackendKind {
+        self.backend.kind()
+    }
+
+    /// The device (`cpu` or the Vulkan device name).
+    pub fn device(&self) -> String {
+        self.backend.device()
+    }
+
+    /// Table precision now (after any widening).
+    pub fn precision(&self) -> Precision {
+        self.backend.precision()
+    }
+
+    /// Departures from the requested configuration made while setting up.
+    pub fn fallbacks(&self) -> &[String] {
+        &self.fallbacks
+    }
+
+    /// GPU memory of the solver by purpose (empty for the CPU backend).
+    pub fn memory(&self) -> MemoryReport {
+        self.backend.memory()
+    }
+
+    /// Fragments each GPU pass draws per propagation (`None` for the CPU backend).
+    pub fn fragments(&mut self) -> Option<Fragments> {
+        self.backend.as_gpu().map(|g| g.fragments())
+    }
+
+    /// The initial state: emission, direct light and environment reflected once, no
+    /// propagation (submitted and waited for).
+    pub fn initialize(&mut self) -> Result<()> {
+        self.backend.initialize(&self.prep)
+    }
+
+    /// `n` iterations of the settings' scheme (submitted and waited for), without the
+    /// convergence monitor: what `profile` times and what a host runs per frame.
+    pub fn iterate(&mut self, n: usize) -> Result<()> {
+        let s = &self.prep.settings;
+        for _ in 0..n {
+            self.backend
+                .iterate(&self.prep, s.scheme, s.antiradiance_steps)?;
+        }
+        Ok(())
+    }
+
+    /// Draws the current state from the camera into host memory.
+    pub fn draw(&mut self) -> Result<Image> {
+        self.backend.draw(&self.prep)
+    }
+
+    /// The current I_ex (unscaled).
+    pub fn i_ex(&mut self) -> Result<Table> {
+        self.backend.i_ex()
+    }
+
+    /// The current display intensity I_total (unscaled).
+    pub fn i_total(&mut self) -> Result<Table> {
+        self.backend.i_total()
+    }
+
+    /// Pass timings (ms, in order) since the last call: GPU timestamps of every pass, or the
+    /// CPU backend's wall times.
+    pub fn take_timings(&mut self) -> Vec<(String, f64)> {
+        self.backend.take_timings()
+    }
+
+    /// The GPU backend, for hosts that record into their own command buffers.
+    pub fn gpu(&mut self) -> Result<&mut gpu::GpuBackend> {
+        self.backend.as_gpu().ok_or_else(|| {
+            Error::Invalid("recording into a command buffer needs the GPU backend".into())
+        })
+    }
+
+    /// Records the initial state into `cmd` (a host's command buffer; call
+    /// [`gpu::GpuBackend::begin`] first for timestamps).
+    pub fn record_initialize(&mut self, cmd: vk::CommandBuffer) -> Result<()> {
+        self.gpu()?.record_initialize(cmd)
+    }
+
+    /// Records `n` iterations of the settings' scheme into `cmd`.
+    pub fn record_iterations(&mut self, cmd: vk::CommandBuffer, n: usize) -> Result<()> {
+        let (scheme, steps) = (
+            self.prep.settings.scheme,
+            self.prep.settings.antiradiance_steps,
+        );
+        self.gpu()?.record_iterations(cmd, scheme, steps, n)
+    }
+
+    /// Records the frame into `cmd`; the image is [`gpu::GpuBackend::frame`]'s `output`.
+    pub fn record_draw(&mut self, cmd: vk::CommandBuffer) -> Result<()> {
+        self.gpu()?.record_draw(cmd);
+        Ok(())
+    }
+
+    /// Solves with the convergence monitor and its fallbacks (the scene's `iterations`, or
+    /// until `tolerance`) and draws the result.
+    pub fn render(&mut self, progress: &dyn Progress) -> Result<Rendered> {
+        let mut last = None;
+        let (stats, i_total) = self.run(false, progress, &mut |f| {
+            last = Some(f.image);
+            Ok(())
+        })?;
+        Ok(Rendered {
+            image: last.ok_or_else(|| Error::Numerical("no frame was drawn".into()))?,
+            stats,
+            i_total,
+        })
+    }
+
+    /// As [`Engine::render`], drawing a frame after every iteration (1..=`iterations`, or only
+    /// the initial state when that is 0) and handing each to `each`: one solve gives the whole
+    /// error-per-iteration curve (`study`). Returns the statistics and the final display table.
+    pub fn render_each_iteration(
+        &mut self,
+        progress: &dyn Progress,
+        each: &mut dyn FnMut(IterationFrame) -> Result<()>,
+    ) -> Result<(RenderStats, Table)> {
+        self.run(true, progress, each)
+    }
+
+    fn run(
+        &mut self,
+        every_iteration: bool,
+        progress: &dyn Progress,
+        each: &mut dyn FnMut(IterationFrame) -> Result<()>,
+    ) -> Result<(RenderStats, Table)> {
+        let start = self.created.take().unwrap_or_else(Instant::now);
+        let setup_start = self.setup_start.take().unwrap_or_else(Instant::now);
+        // Solve time excludes the frames and the callback (they are not part of solving).
+        let setup_ms = Cell::new(0.0);
+        let solve_start = Cell::new(Instant::now());
+        let mut excluded_ms = 0.0;
+        let prep = &self.prep;
+        let mut initialized = || {
+            setup_ms.set(ms(setup_start));
+            solve_start.set(Instant::now());
+        };
+        let mut on_frame = |k: usize, backend: &mut dyn Backend| -> Result<()> {
+            let t = Instant::now();
+            let image = backend.draw(prep)?;
+            if !image.is_finite() {
+                return Err(Error::Numerical(format!(
+                    "the frame after iteration {k} has non-finite pixels"
+                )));
+            }
+            let frame_ms = ms(t);
+            excluded_ms += frame_ms;
+            let t = Instant::now();
+            each(IterationFrame {
+                iteration: k,
+                image,
+                setup_ms: setup_ms.get(),
+                solve_ms: ms(solve_start.get()) - excluded_ms,
+                frame_ms,
+            })?;
+            excluded_ms += ms(t);
+            Ok(())
+        };
+        let outcome = drive::drive(
+            prep,
+            self.backend.as_mut(),
+            every_iteration,
+            progress,
+            &mut initialized,
+            &mut on_frame,
+        )?;
+        let mut pass_ms = BTreeMap::new();
+        for (k, v) in self.backend.take_timings() {
+            *pass_ms.entry(k).or_insert(0.0) += v;
+        }
+        let sys = &prep.system;
+        let mut fallbacks = self.fallbacks.clone();
+        fallbacks.extend(outcome.fallbacks);
+        let stats = RenderStats {
+            backend: self.backend.kind(),
+            device: self.backend.device(),
+            elements: sys.leaves.len(),
+            links: sys.links.links.len(),
+            bins: sys.bins.count,
+            iterations: outcome.residuals.len(),
+            scheme: outcome.scheme.unwrap_or(prep.settings.scheme),
+            precision: self.backend.precision(),
+            width: prep.camera.width,
+            height: prep.camera.height,
+            passes: prep.plan.passes(),
+            decisions: prep.plan.decisions.clone(),
+            all_passes: prep.plan.all_passes,
+            target: prep.target.clone(),
+            pass_ms,
+            linking_ms: sys.meshing_ms + sys.links.linking_ms,
+            total_ms: 0.0,
+            residuals: outcome.residuals,
+            energies: outcome.energies,
+            estimated_error: outcome.estimated_error,
+            fallbacks,
+            warnings: outcome.warnings,
+        };
+        let i_total = self.backend.i_total()?;
+        Ok((
+            RenderStats {
+                total_ms: ms(start),
+                ..stats
+            },
+            i_total,
+        ))
+    }
+}
+
+/// Renders `scene` from its camera with its settings and `options`: [`Engine::new`] then
+/// [`Engine::render`].
+pub fn render(scene: &Scene, options: &Options, progress: &dyn Progress) -> Result<Rendered> {
+    Engine::new(scene, options, progress)?.render(progress)
+}

@@ -1,0 +1,192 @@
+//! What a run uses beyond the scene file: the backend, device, solver and camera overrides from
+//! the command line or an embedding host. Options are resolved against a scene into the
+//! effective settings; they are never written into the scene.
+
+use crate::error::{Error, Result};
+use crate::gpu::Context;
+use crate::plan::target::{self, TargetChoice};
+use crate::scene::{Camera, Precision, Scene, Scheme, SolverSettings};
+use crate::settings::BackendKind;
+use std::sync::Arc;
+
+/// Solver settings that replace the scene's `[solver]` values where given.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SolverOverrides {
+    /// Directional bins.
+    pub bins: Option<usize>,
+    /// Iterations (0: the initial state only, direct light and emission).
+    pub iterations: Option<usize>,
+    /// Iteration scheme.
+    pub scheme: Option<Scheme>,
+    /// GPU table precision.
+    pub precision: Option<Precision>,
+    /// Longest edge of a leaf element (scene units).
+    pub element_size: Option<f64>,
+    /// Oracle threshold τ.
+    pub oracle: Option<f64>,
+    /// Antiradiance steps per radiance step (asymmetric).
+    pub antiradiance_steps: Option<usize>,
+    /// Iterate until the estimated error is below this.
+    pub tolerance: Option<f64>,
+    /// Iteration cap with a tolerance.
+    pub max_iterations: Option<usize>,
+}
+
+impl SolverOverrides {
+    /// `base` with these overrides applied.
+    pub fn apply(&self, base: &SolverSettings) -> SolverSettings {
+        let mut s = base.clone();
+        s.bins = self.bins.unwrap_or(s.bins);
+        s.iterations = self.iterations.unwrap_or(s.iterations);
+        s.scheme = self.scheme.unwrap_or(s.scheme);
+        s.precision = self.precision.unwrap_or(s.precision);
+        s.element_size = self.element_size.unwrap_or(s.element_size);
+        s.oracle = self.oracle.unwrap_or(s.oracle);
+        s.antiradiance_steps = self.antiradiance_steps.unwrap_or(s.antiradiance_steps);
+        s.tolerance = self.tolerance.or(s.tolerance);
+        s.max_iterations = self.max_iterations.unwrap_or(s.max_iterations);
+        s
+    }
+}
+
+/// GPU knobs for tests and diagnostics.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct GpuTuning {
+    /// Caps the rows per column block below maxImageDimension2D (exercises the column split).
+    pub column_height: Option<u32>,
+    /// Accumulate L_in and L_push in the table format even where the device truncates float16
+    /// blending.
+    pub force_table_accumulation: bool,
+}
+
+/// Options of an [`super::Engine`] beyond the scene's own settings.
+#[derive(Clone)]
+pub struct Options {
+    /// Which implementation solves and draws.
+    pub backend: BackendKind,
+    /// Solver settings replacing the scene's.
+    pub solver: SolverOverrides,
+    /// Image width replacing the camera's.
+    pub width: Option<u32>,
+    /// Image height replacing the camera's.
+    pub height: Option<u32>,
+    /// Side of each shadow map (texels).
+    pub shadow_map_size: u32,
+    /// Device to render on (GPU backend; a host's device when embedding); `None` creates a
+    /// headless context.
+    pub context: Option<Arc<Context>>,
+    /// Vulkan device name filter (GPU backend, headless).
+    pub device: Option<String>,
+    /// Enable the Vulkan validation layer (tests).
+    pub validation: bool,
+    /// Run every pass and create every table whether the scene needs it or not, with float32
+    /// tables (`--all-passes`: the reference the scene-adaptive plan is checked against).
+    pub all_passes: bool,
+    /// Choose bins, element size and iterations for this relative RMSE from the measured
+    /// error-vs-time data ([`crate::plan::target`]), replacing the scene's and the overrides.
+    pub target_error: Option<f64>,
+    /// GPU knobs for tests.
+    pub gpu: GpuTuning,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            backend: BackendKind::Gpu,
+            solver: SolverOverrides::default(),
+            width: None,
+            height: None,
+            shadow_map_size: 1024,
+            context: None,
+            device: None,
+            validation: false,
+            all_passes: false,
+            target_error: None,
+            gpu: GpuTuning::default(),
+        }
+    }
+}
+
+/// The settings a run uses: the scene's, with the options applied.
+#[derive(Debug, Clone)]
+pub struct Resolved {
+    /// Effective solver settings.
+    pub settings: SolverSettings,
+    /// Effective camera.
+    pub camera: Camera,
+    /// The setting `target_error` chose, if given.
+    pub target: Option<TargetChoice>,
+}
+
+impl Options {
+    /// Options for `backend`, everything else default.
+    pub fn backend(backend: BackendKind) -> Self {
+        Self {
+            backend,
+            ..Self::default()
+        }
+    }
+
+    /// Checks the option values themselves (ranges that do not depend on the scene).
+    pub fn validate(&self) -> Result<()> {
+        let bad = |m: String| Err(Error::Invalid(m));
+        if let Some(e) = self.target_error {
+            if !(e > 0.0 && e.is_finite()) {
+                return bad(format!(
+                    "--target-error must be positive and finite, got {e}"
+                ));
+            }
+        }
+        if let Some(t) = self.solver.tolerance {
+            if !(t > 0.0 && t < 1.0) {
+                return bad(format!("--tolerance must be in (0, 1), got {t}"));
+            }
+        }
+        if self.solver.max_iterations == Some(0) {
+            return bad("--max-iterations must be at least 1".into());
+        }
+        for (flag, v) in [("--width", self.width), ("--height", self.height)] {
+            if let Some(v) = v {
+                if !(1..=16384).contains(&v) {
+                    return bad(format!("{flag} must be 1..=16384, got {v}"));
+                }
+            }
+        }
+        if !(16..=8192).contains(&self.shadow_map_size) {
+            return bad(format!(
+                "--shadow-map-size must be 16..=8192, got {}",
+                self.shadow_map_size
+            ));
+        }
+        if let Some(b) = self.solver.bins {
+            crate::bins::Bins::new(b).map_err(|e| Error::Invalid(format!("--bins: {e}")))?;
+        }
+        if let Some(e) = self.solver.element_size {
+            if !(e > 0.0 && e.is_finite()) {
+                return bad(format!("element size must be positive and finite, got {e}"));
+            }
+        }
+        Ok(())
+    }
+
+    /// The effective settings and camera for `scene`.
+    pub fn resolve(&self, scene: &Scene) -> Result<Resolved> {
+        self.validate()?;
+        let mut settings = self.solver.apply(&scene.solver);
+        let target = self.target_error.map(|e| target::choose(scene, e));
+        if let Some(c) = &target {
+            settings.bins = c.bins;
+            settings.element_size = c.element_size;
+            settings.iterations = c.iterations;
+            settings.tolerance = None;
+        }
+        let mut camera = scene.camera.clone();
+        camera.width = self.width.unwrap_or(camera.width);
+        camera.height = self.height.unwrap_or(camera.height);
+        Ok(Resolved {
+            settings,
+            camera,
+            target,
+        })
+    }
+}

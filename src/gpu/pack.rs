@@ -1,0 +1,350 @@
+//! Pure CPU packing: everything the GPU solver and frame upload, laid out as the shaders read it
+//! (texel formats, table layout, `#[repr(C)]` records of [`super::layout`]). No Vulkan calls, so
+//! every function is unit-tested without a device.
+
+use super::layout::{CornerVertex, GpuFrameElement, GpuLight, GpuMaterial, GpuShadowView};
+use super::tables::TableLayout;
+use crate::frame::shadow::ShadowMaps;
+use crate::frame::surfaces::{Surfaces, MODE_SPLAT};
+use crate::scene::{Light, Scene};
+use crate::system::System;
+use ash::vk;
+use glam::{DMat4, DVec3};
+use half::f16;
+
+/// `CornerVertex::leaf` bit of crack-filling input triangles (`AR_FILLER` in gbuffer.vert).
+pub const FILLER: u32 = 0x8000_0000;
+
+/// Encodes RGBA f32 texels in `format` (float16 or float32).
+pub fn encode(format: vk::Format, texels: &[[f32; 4]]) -> Vec<u8> {
+    if format == vk::Format::R16G16B16A16_SFLOAT {
+        texels
+            .iter()
+            .flat_map(|t| {
+                t.iter()
+                    .flat_map(|&x| f16::from_f32(x).to_bits().to_le_bytes())
+            })
+            .collect()
+    } else {
+        texels
+            .iter()
+            .flat_map(|t| t.iter().flat_map(|x| x.to_le_bytes()))
+            .collect()
+    }
+}
+
+/// Decodes RGBA texels of `format` (float16 or float32) to f32.
+pub fn decode(format: vk::Format, bytes: &[u8]) -> Vec<[f32; 4]> {
+    if format == vk::Format::R16G16B16A16_SFLOAT {
+        bytes
+            .chunks_exact(8)
+            .map(|c| {
+                let h = |i: usize| {
+                    f16::from_bits(u16::from_le_bytes([c[2 * i], c[2 * i + 1]])).to_f32()
+                };
+                [h(0), h(1), h(2), h(3)]
+            })
+            .collect()
+    } else {
+        bytes
+            .chunks_exact(16)
+            .map(|c| {
+                let f = |i: usize| {
+                    f32::from_le_bytes([c[4 * i], c[4 * i + 1], c[4 * i + 2], c[4 * i + 3]])
+                };
+                [f(0), f(1), f(2), f(3)]
+            })
+            .collect()
+    }
+}
+
+/// Decodes single-channel float32 texels.
+pub fn decode_r32(bytes: &[u8]) -> Vec<f32> {
+    bytes
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect()
+}
+
+/// Per-row attribute texels of the leaves: (normal, area) and (cosine normalization, material,
+/// leaf flag); cluster rows are zero. `layout.columns × layout.rows_per_column` texels each.
+pub fn attributes(sys: &System, layout: &TableLayout) -> (Vec<[f32; 4]>, Vec<[f32; 4]>) {
+    let (rw, rh) = (layout.columns, layout.rows_per_column);
+    let mut na = vec![[0.0f32; 4]; (rw * rh) as usize];
+    let mut lf = vec![[0.0f32; 4]; (rw * rh) as usize];
+    for leaf in &sys.leaves {
+        let (x, y) = layout.row_texel(leaf.node);
+        let i = (y * rw + x) as usize;
+        let n = leaf.normal;
+        na[i] = [n.x as f32, n.y as f32, n.z as f32, leaf.area as f32];
+        lf[i] = [leaf.cos_norm as f32, leaf.material as f32, 1.0, 0.0];
+    }
+    (na, lf)
+}
+
+/// Lobe factors of the glossy leaves in table layout (zero elsewhere), for an image of
+/// `width × height` texels (1×1 when the scene has no glossy tables).
+pub fn lobe_factors(sys: &System, layout: &TableLayout, width: u32, height: u32) -> Vec<f32> {
+    let mut lobe = vec![0.0f32; (width * height) as usize];
+    if width == 1 && height == 1 {
+        return lobe;
+    }
+    for (li, leaf) in sys.leaves.iter().enumerate() {
+        if let Some(f) = sys.lobe_factors(li) {
+            for (j, &v) in f.iter().enumerate() {
+                let (x, y) = layout.texel(leaf.node, j as u32);
+                lobe[(y * width + x) as usize] = v;
+            }
+        }
+    }
+    lobe
+}
+
+/// Dense cone-filter tables: one `m × m` layer per used class (row = central bin, column =
+/// receiver bin), at least one layer.
+pub fn filter_tables(sys: &System) -> Vec<f32> {
+    let m = sys.bins.count;
+    let classes = sys.filters.used_classes();
+    let mut ft = vec![0.0f32; m * m * classes.len().max(1)];
+    for (layer, c) in classes.into_iter().enumerate() {
+        for (l, row) in sys.filters.rows[c].iter().enumerate() {
+            for &(j, w) in row {
+                ft[(layer * m + l) * m + j as usize] = w;
+            }
+        }
+    }
+    ft
+}
+
+/// The solver's material records, with each glossy material's exponent as the bins sample it.
+pub fn solver_materials(sys: &System) -> Vec<GpuMaterial> {
+    sys.materials
+        .iter()
+        .zip(&sys.lobes)
+        .map(|(m, lobe)| GpuMaterial::with_exponent(m, lobe.map_or(m.ns, |l| l.exponent)))
+        .collect()
+}
+
+/// Storage buffers may not be empty: one unused record pads an empty list.
+pub fn padded<T: Copy + Default>(v: Vec<T>) -> Vec<T> {
+    if v.is_empty() {
+        vec![T::default()]
+    } else {
+        v
+    }
+}
+
+fn v4(v: DVec3, w: f32) -> [f32; 4] {
+    [v.x as f32, v.y as f32, v.z as f32, w]
+}
+
+/// A column-major f32 matrix.
+pub fn mat(m: DMat4) -> [[f32; 4]; 4] {
+    m.to_cols_array_2d().map(|c| c.map(|v| v as f32))
+}
+
+/// Element corners for the shadow and G-buffer passes: three per leaf, then every input
+/// triangle again, flagged [`FILLER`] and drawn behind the elements (bisection leaves
+/// T-junctions whose float rounding opens pinhole cracks between elements; these fill them).
+pub fn corners(scene: &Scene, sys: &System, surf: &Surfaces) -> Vec<CornerVertex> {
+    let mut out: Vec<CornerVertex> = (0..sys.leaves.len())
+        .flat_map(|li| {
+            let e = &sys.elements[sys.hierarchy.element(sys.leaves[li].node).unwrap_or(0) as usize];
+            (0..3).map(move |k| (li, e.corners[k], k))
+        })
+        .map(|(li, p, k)| CornerVertex {
+            position: [p.x as f32, p.y as f32, p.z as f32],
+            leaf: li as u32,
+            vertex: surf.corner_vertex[li][k],
+        })
+        .collect();
+    let mut tri = 0usize;
+    for m in &scene.meshes {
+        for t in &m.triangles {
+            let leaf = surf.triangle_leaf[tri];
+            if leaf != u32::MAX {
+                for (&v, &vertex) in t.iter().zip(&surf.triangle_vertices[tri]) {
+                    let p = m.positions[v as usize];
+                    out.push(CornerVertex {
+                        position: [p.x as f32, p.y as f32, p.z as f32],
+                        leaf: leaf | FILLER,
+                        vertex,
+                    });
+                }
+            }
+            tri += 1;
+        }
+    }
+    out
+}
+
+/// Leaf slots splatted by the frame (flat-surface elements, when the plan splats).
+pub fn splat_instances(surf: &Surfaces, splat: bool) -> Vec<u32> {
+    (0..surf.mode.len() as u32)
+        .filter(|&li| splat && surf.mode[li as usize] == MODE_SPLAT)
+        .collect()
+}
+
+/// Per-leaf records of the frame passes, in leaf-slot order.
+pub fn frame_elements(sys: &System, surf: &Surfaces) -> Vec<GpuFrameElement> {
+    sys.leaves
+        .iter()
+        .enumerate()
+        .map(|(li, l)| GpuFrameElement {
+            center_radius: v4(surf.center[li], surf.radius[li] as f32),
+            normal_area: v4(l.normal, l.area as f32),
+            ids: [l.node, surf.surface[li], surf.mode[li], l.material],
+            cos_norm: [l.cos_norm as f32, 0.0, 0.0, 0.0],
+        })
+        .collect()
+}
+
+/// The lights as the compose pass reads them, each with its range of shadow views.
+pub fn lights(lights: &[Light], maps: &ShadowMaps) -> Vec<GpuLight> {
+    lights
+        .iter()
+        .zip(&maps.light_views)
+        .map(|(l, &(first, count))| {
+            let (kind, pos, dir, power, cutoff, beam) = match *l {
+                Light::Directional {
+                    direction,
+                    irradiance,
+                } => (0, DVec3::ZERO, direction, irradiance, 0.0, 0.0),
+                Light::Point {
+                    position,
+                    intensity,
+                } => (1, position, DVec3::Z, intensity, 0.0, 0.0),
+                Light::Spot {
+                    position,
+                    axis,
+                    intensity,
+                    cutoff,
+                    beam_width,
+                } => (2, position, axis, intensity, cutoff, beam_width),
+            };
+            GpuLight {
+                kind_views: [kind, first, count, 0],
+                position: v4(pos, 0.0),
+                direction: v4(dir, 0.0),
+                power: v4(power, cutoff as f32),
+                params: [beam as f32, 0.0, 0.0, 0.0],
+            }
+        })
+        .collect()
+}
+
+/// The shadow-map views.
+pub fn shadow_views(maps: &ShadowMaps) -> Vec<GpuShadowView> {
+    maps.views
+        .iter()
+        .map(|v| GpuShadowView {
+            view_proj: mat(v.view_proj),
+            origin: v4(v.origin, if v.ortho { 1.0 } else { 0.0 }),
+            forward: v4(v.forward, v.half as f32),
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::Material;
+
+    fn plane() -> (Scene, System) {
+        let mut s = Scene::empty();
+        let m = s.add_material(Material {
+            ks: DVec3::splat(0.3),
+            ns: 20.0,
+            ..Material::diffuse("glossy", 0.5)
+        });
+        s.add_mesh(
+            "plane",
+            vec![
+                DVec3::new(0.0, 0.0, 0.0),
+                DVec3::new(1.0, 0.0, 0.0),
+                DVec3::new(1.0, 0.0, -1.0),
+                DVec3::new(0.0, 0.0, -1.0),
+            ],
+            vec![[0, 1, 2], [0, 2, 3]],
+            m,
+        );
+        s.solver.bins = 32;
+        s.solver.element_size = 0.6;
+        let sys = System::build(&s).unwrap();
+        (s, sys)
+    }
+
+    #[test]
+    fn texels_round_trip_in_both_formats() {
+        let t = [[1.5f32, -2.25, 65504.0, 0.0], [1e-3, 0.0, -0.5, 7.0]];
+        for f in [
+            vk::Format::R16G16B16A16_SFLOAT,
+            vk::Format::R32G32B32A32_SFLOAT,
+        ] {
+            let back = decode(f, &encode(f, &t));
+            for (a, b) in t.iter().flatten().zip(back.iter().flatten()) {
+                assert!((a - b).abs() <= a.abs() * 1e-3, "{f:?}: {a} vs {b}");
+            }
+        }
+        assert_eq!(encode(vk::Format::R16G16B16A16_SFLOAT, &t).len(), 16);
+        assert_eq!(decode_r32(&2.5f32.to_le_bytes()), [2.5]);
+    }
+
+    #[test]
+    fn attributes_and_lobes_sit_on_the_leaf_rows() {
+        let (_, sys) = plane();
+        let layout = TableLayout::with_column_height(sys.rows() as u32, 32, 16384, 3).unwrap();
+        let (na, lf) = attributes(&sys, &layout);
+        assert_eq!(na.len(), (layout.columns * layout.rows_per_column) as usize);
+        let rows_with_leaf = lf.iter().filter(|t| t[2] == 1.0).count();
+        assert_eq!(rows_with_leaf, sys.leaves.len());
+        for leaf in &sys.leaves {
+            let (x, y) = layout.row_texel(leaf.node);
+            let t = na[(y * layout.columns + x) as usize];
+            assert_eq!(t[1], 1.0, "normal is +y");
+            assert!((t[3] as f64 - leaf.area).abs() < 1e-6);
+        }
+        let (w, h) = (layout.width(), layout.rows_per_column);
+        let lobe = lobe_factors(&sys, &layout, w, h);
+        let nonzero = lobe.iter().filter(|v| **v != 0.0).count();
+        assert!(nonzero > 0 && nonzero <= sys.leaves.len() * 32);
+        for (li, leaf) in sys.leaves.iter().enumerate() {
+            let f = sys.lobe_factors(li).unwrap();
+            let (x, y) = layout.texel(leaf.node, 5);
+            assert_eq!(lobe[(y * w + x) as usize], f[5]);
+        }
+        assert_eq!(lobe_factors(&sys, &layout, 1, 1), [0.0]);
+    }
+
+    #[test]
+    fn filter_tables_hold_every_used_row() {
+        let (_, sys) = plane();
+        let m = sys.bins.count;
+        let ft = filter_tables(&sys);
+        let classes = sys.filters.used_classes();
+        assert_eq!(ft.len(), m * m * classes.len().max(1));
+        for (layer, c) in classes.into_iter().enumerate() {
+            for (l, row) in sys.filters.rows[c].iter().enumerate() {
+                let sum: f32 = ft[(layer * m + l) * m..(layer * m + l + 1) * m]
+                    .iter()
+                    .sum();
+                let want: f32 = row.iter().map(|e| e.1).sum();
+                assert!((sum - want).abs() < 1e-5);
+            }
+        }
+    }
+
+    #[test]
+    fn corners_cover_every_leaf_and_filler_triangle() {
+        let (s, sys) = plane();
+        let surf = Surfaces::new(&s, &sys);
+        let c = corners(&s, &sys, &surf);
+        let fillers = c.iter().filter(|v| v.leaf & FILLER != 0).count();
+        assert_eq!(c.len() - fillers, 3 * sys.leaves.len());
+        assert_eq!(fillers, 3 * s.triangle_count());
+        assert_eq!(frame_elements(&sys, &surf).len(), sys.leaves.len());
+        assert_eq!(splat_instances(&surf, true).len(), sys.leaves.len());
+        assert!(splat_instances(&surf, false).is_empty());
+        assert_eq!(padded(Vec::<u32>::new()), [0]);
+    }
+}

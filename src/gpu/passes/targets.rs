@@ -1,0 +1,90 @@
+//! The frame's image set (shared by the frame passes and [`crate::gpu::frame::GpuFrame`], which
+//! both import it from here), described as data from the camera size and the plan.
+
+use crate::frame::camera::SUPERSAMPLE;
+use crate::gpu::memory::{resource_set, ImageDesc, Purpose, DEPTH_FORMAT};
+use crate::plan::Features;
+use ash::vk;
+
+/// Format of the frame's float targets.
+pub const RGBA32F: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+
+resource_set! {
+    /// Images of the frame passes.
+    pub struct FrameImages {
+        /// Shadow maps, views stacked vertically (R32F linear distances).
+        pub shadow_map,
+        /// Depth for the shadow-map views.
+        pub shadow_depth,
+        /// G-buffer position + leaf (2W × 2H).
+        pub gbuf_position,
+        /// G-buffer vertex-interpolated radiance (1×1 placeholder without smooth meshes).
+        pub gbuf_vertex,
+        /// G-buffer depth.
+        pub gbuf_depth,
+        /// Splat sums (Σ w·L, Σ w) (1×1 placeholder without flat surfaces).
+        pub splat,
+        /// Final linear radiance (W × H).
+        pub output,
+    }
+}
+
+impl FrameImages<ImageDesc> {
+    /// The images of a `width × height` frame with `views` shadow views of `shadow_size`²
+    /// texels; the vertex-radiance and splat targets only where `features` draw them.
+    pub fn describe(
+        width: u32,
+        height: u32,
+        features: &Features,
+        shadow_size: u32,
+        views: u32,
+    ) -> Self {
+        let (sw, sh) = (width * SUPERSAMPLE, height * SUPERSAMPLE);
+        let frame = |name: &str, w, h, f| ImageDesc::new(name, w, h, f, Purpose::FrameImages);
+        let shadow = |name: &str, f| {
+            let (w, h) = (shadow_size.max(1), (shadow_size * views).max(1));
+            ImageDesc::new(name, w, h, f, Purpose::ShadowMaps)
+        };
+        Self {
+            shadow_map: shadow("shadow maps", vk::Format::R32_SFLOAT),
+            shadow_depth: shadow("shadow depth", DEPTH_FORMAT),
+            gbuf_position: frame("G-buffer position", sw, sh, RGBA32F),
+            gbuf_vertex: if features.vertex {
+                frame("G-buffer vertex radiance", sw, sh, RGBA32F)
+            } else {
+                frame("G-buffer vertex radiance (none)", 1, 1, RGBA32F)
+            },
+            gbuf_depth: frame("G-buffer depth", sw, sh, DEPTH_FORMAT),
+            splat: if features.splat {
+                frame("splat sums", sw, sh, RGBA32F)
+            } else {
+                frame("splat sums (none)", 1, 1, RGBA32F)
+            },
+            output: frame("frame", width, height, RGBA32F),
+        }
+    }
+}
+
+resource_set! {
+    /// Buffers of the frame passes: vertex input, then the storage buffers of the frame set.
+    pub struct FrameBuffers {
+        /// Element corners and crack-filling input triangles (shadow, G-buffer).
+        pub corners,
+        /// Leaf slots to splat (one instance per fan).
+        pub splats,
+        /// Materials (the frame's BRDF uses each material's own exponent).
+        pub materials,
+        /// Bin centers.
+        pub bin_centers,
+        /// Per-leaf records.
+        pub elements,
+        /// Shared-vertex CSR offsets.
+        pub adj_offsets,
+        /// Shared-vertex leaf lists.
+        pub adj_list,
+        /// Lights.
+        pub lights,
+        /// Shadow views.
+        pub shadow_views,
+    }
+}

@@ -1,0 +1,148 @@
+//! The typed run settings shared by the scene format, the command line, the engine and the
+//! reports: iteration scheme, table precision and backend. Each is an enum with one spelling
+//! (`Display`, `FromStr`, serde and `clap::ValueEnum` all use it), so no other code matches
+//! strings.
+
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use std::str::FromStr;
+
+/// Defines `Display`/`FromStr` from one table of (variant, spelling), and the list of accepted
+/// spellings for error messages.
+macro_rules! spelled {
+    ($ty:ident, $what:literal, [$(($v:ident, $s:literal)),+ $(,)?]) => {
+        impl $ty {
+            /// The spelling used in scene files, on the command line and in reports.
+            pub fn as_str(self) -> &'static str {
+                match self {
+                    $($ty::$v => $s,)+
+                }
+            }
+        }
+        impl fmt::Display for $ty {
+            fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str(self.as_str())
+            }
+        }
+        impl FromStr for $ty {
+            type Err = String;
+            fn from_str(s: &str) -> Result<Self, String> {
+                match s {
+                    $($s => Ok($ty::$v),)+
+                    _ => Err(format!(
+                        concat!($what, " must be {}, got {:?}"),
+                        [$(concat!("\"", $s, "\"")),+].join(" or "),
+                        s
+                    )),
+                }
+            }
+        }
+    };
+}
+
+/// Iteration scheme of §2.2.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum, Default,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum Scheme {
+    /// Alternate radiance and antiradiance propagation (eqs. 13 and 14 in lockstep).
+    #[default]
+    Symmetric,
+    /// One radiance step, then several antiradiance steps with radiance frozen (provably converges).
+    Asymmetric,
+}
+spelled!(
+    Scheme,
+    "scheme",
+    [(Symmetric, "symmetric"), (Asymmetric, "asymmetric")]
+);
+
+impl Scheme {
+    /// The other scheme (for sweeps and fallbacks).
+    pub fn other(self) -> Self {
+        match self {
+            Scheme::Symmetric => Scheme::Asymmetric,
+            Scheme::Asymmetric => Scheme::Symmetric,
+        }
+    }
+}
+
+/// Storage precision of the solver's tables: the GPU's float16 or float32 images, or the CPU
+/// solver's f64 (reported, never requested).
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum, Default,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum Precision {
+    /// R16G16B16A16_SFLOAT (the paper's float16).
+    #[default]
+    F16,
+    /// R32G32B32A32_SFLOAT.
+    F32,
+    /// The CPU solver's f64 tables (what a CPU result reports; not a GPU choice).
+    #[value(skip)]
+    F64,
+}
+spelled!(
+    Precision,
+    "precision",
+    [(F16, "f16"), (F32, "f32"), (F64, "f64")]
+);
+
+impl Precision {
+    /// The other GPU precision (for sweeps).
+    pub fn other(self) -> Self {
+        match self {
+            Precision::F16 => Precision::F32,
+            _ => Precision::F16,
+        }
+    }
+}
+
+/// Which implementation solves and draws the frame.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum, Default,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum BackendKind {
+    /// Vulkan raster passes (§4).
+    #[default]
+    Gpu,
+    /// The f64 CPU solver and a ray-cast frame: the reference the GPU is checked against.
+    Cpu,
+}
+spelled!(BackendKind, "backend", [(Gpu, "gpu"), (Cpu, "cpu")]);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_spelling_everywhere() {
+        for s in [Scheme::Symmetric, Scheme::Asymmetric] {
+            assert_eq!(s.to_string().parse::<Scheme>(), Ok(s));
+            assert_eq!(serde_json::to_string(&s).unwrap(), format!("\"{s}\""));
+            let v = <Scheme as clap::ValueEnum>::to_possible_value(&s).unwrap();
+            assert_eq!(v.get_name(), s.as_str());
+        }
+        for p in [Precision::F16, Precision::F32, Precision::F64] {
+            assert_eq!(p.to_string().parse::<Precision>(), Ok(p));
+            assert_eq!(serde_json::to_string(&p).unwrap(), format!("\"{p}\""));
+        }
+        for b in [BackendKind::Gpu, BackendKind::Cpu] {
+            assert_eq!(b.to_string().parse::<BackendKind>(), Ok(b));
+            assert_eq!(serde_json::to_string(&b).unwrap(), format!("\"{b}\""));
+        }
+        // f64 is reported, not offered on the command line.
+        let names: Vec<_> = <Precision as clap::ValueEnum>::value_variants()
+            .iter()
+            .filter_map(|p| clap::ValueEnum::to_possible_value(p).map(|v| v.get_name().to_string()))
+            .collect();
+        assert_eq!(names, ["f16", "f32"]);
+        assert_eq!(
+            "f8".parse::<Precision>().unwrap_err(),
+            r#"precision must be "f16" or "f32" or "f64", got "f8""#
+        );
+    }
+}
