@@ -15,7 +15,7 @@ use antiradiance::progress::Silent;
 use antiradiance::scene::{load_scene, Precision, Scene, Scheme};
 use antiradiance::BackendKind as Backend;
 use antiradiance::{CpuSolver, System};
-use common::{context, render_checked};
+use common::{assert_clean, context, render_checked};
 use std::path::Path;
 
 fn scene(name: &str) -> Scene {
@@ -375,6 +375,44 @@ fn memory_follows_the_plan() {
         }
     }
     assert!(ctx.validation_messages().is_empty());
+}
+
+/// One memory model: `info`'s figures (computed without a device) are what `profile` reads from
+/// the device's solver, for the plan and for every pass. At float32 the accumulation format is
+/// the table format on any device, so the two must be equal byte for byte.
+#[test]
+fn info_memory_equals_what_profile_reads_from_the_device() {
+    let ctx = context();
+    for name in ["occluded-room.toml", "glossy-room.toml"] {
+        let s = scene(name);
+        for all_passes in [false, true] {
+            let o = Options {
+                all_passes,
+                context: Some(ctx.clone()),
+                solver: antiradiance::engine::SolverOverrides {
+                    precision: Some(Precision::F32),
+                    ..Default::default()
+                },
+                ..Options::default()
+            };
+            let info = Info::of(&s, &o, &Silent).unwrap();
+            let profile = antiradiance::profile::profile(&s, &o, 1, 0).unwrap();
+            let solver = |m: &std::collections::BTreeMap<String, u64>| {
+                let mut m = m.clone();
+                for k in ["frame_images", "shadow_maps", "cpu_tables", "total"] {
+                    m.remove(k);
+                }
+                m
+            };
+            println!("{name} all_passes={all_passes}: {:?}", solver(&info.memory_bytes));
+            assert_eq!(
+                solver(&info.memory_bytes),
+                solver(&profile.memory_bytes),
+                "{name} all_passes={all_passes}"
+            );
+        }
+    }
+    assert_clean(&ctx);
 }
 
 /// A solver planned without lights or environment refuses them instead of ignoring them.
