@@ -1,9 +1,13 @@
 //! Scenes: triangle meshes with Phong materials, analytic lights, environment, camera and solver
 //! settings. `format` is the TOML on disk, `load` turns it into a validated [`Scene`].
 
+mod files;
 pub mod format;
 pub mod limits;
 pub mod load;
+mod obj;
+mod object;
+mod settings;
 
 use glam::DVec3;
 use std::path::PathBuf;
@@ -149,7 +153,8 @@ pub enum Precision {
 /// Solver settings (`[solver]`). The ranges below are checked when a scene file is loaded.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SolverSettings {
-    /// Directional bins `m`: at least 1, a count [`crate::bins::Bins::new`] lays out as a grid.
+    /// Directional bins `m`: [`crate::bins::MIN_BINS`]..=[`crate::bins::MAX_BINS`], a count
+    /// [`crate::bins::Bins::new`] lays out as a grid.
     pub bins: usize,
     /// Iterations (outer iterations for the asymmetric scheme): 1..=[`MAX_ITERATIONS`].
     pub iterations: usize,
