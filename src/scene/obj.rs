@@ -5,6 +5,7 @@
 
 use super::files;
 use crate::error::{Error, Result};
+use std::collections::HashMap;
 use std::path::Path;
 
 /// What the scan of an OBJ learned, for checks after `tobj` has parsed it.
@@ -26,6 +27,9 @@ pub struct ObjScan {
     /// The text for `tobj`: the file with `l` lines blanked (so it is the file unless there are
     /// polylines).
     pub text: String,
+    /// Faces that repeat an earlier face (the same corner positions in the same cyclic order,
+    /// whatever vertex they start from): line → line of the earlier face.
+    pub repeated_faces: HashMap<u32, u32>,
 }
 
 /// Parses one number as `tobj` does (float32).
@@ -51,6 +55,8 @@ pub fn scan_obj(text: &str, path: &Path) -> Result<ObjScan> {
     // end: `tobj` checks bounds against the whole file, and ignores texture coordinate and
     // normal indices when the file has none.
     let mut corners: Vec<(u32, usize, isize, isize)> = Vec::new();
+    // Each face's line and its vertex corners (a range of `corners`).
+    let mut faces: Vec<(u32, std::ops::Range<usize>)> = Vec::new();
     // The `usemtl` in force: its entry in `s.usemtl` and its line.
     let mut material: Option<(usize, u32)> = None;
     for (n, line) in text.lines().enumerate() {
@@ -119,6 +125,7 @@ pub fn scan_obj(text: &str, path: &Path) -> Result<ObjScan> {
                         ),
                     ));
                 }
+                let first_corner = corners.len();
                 for r in &refs {
                     let parts: Vec<&str> = r.split('/').collect();
                     let bad = || {
@@ -140,6 +147,7 @@ pub fn scan_obj(text: &str, path: &Path) -> Result<ObjScan> {
                         corners.push((no as u32, kind, at, x));
                     }
                 }
+                faces.push((no as u32, first_corner..corners.len()));
                 s.triangle_lines
                     .extend(std::iter::repeat_n(no as u32, refs.len() - 2));
                 match material {
@@ -197,6 +205,26 @@ pub fn scan_obj(text: &str, path: &Path) -> Result<ObjScan> {
                     vline as usize,
                     format!("vertex {p:?} (used by the face at line {no}) is not finite"),
                 ));
+            }
+        }
+    }
+    // Positions, not indices: a face written again with its own copies of the vertices (as
+    // the Cornell box's bottom faces are) is the same surface.
+    let mut first_of: HashMap<Vec<[u32; 3]>, u32> = HashMap::new();
+    for (no, range) in &faces {
+        let mut key: Vec<[u32; 3]> = corners[range.clone()]
+            .iter()
+            .filter(|c| c.1 == 0)
+            .map(|c| s.vertices[c.2 as usize].0.map(f32::to_bits))
+            .collect();
+        let start = (0..key.len()).min_by_key(|&k| key[k]).unwrap_or(0);
+        key.rotate_left(start);
+        match first_of.get(&key) {
+            Some(&earlier) => {
+                s.repeated_faces.insert(*no, earlier);
+            }
+            None => {
+                first_of.insert(key, *no);
             }
         }
     }
@@ -293,7 +321,16 @@ pub fn read_mtl(path: &Path, obj: &Path, line: u32) -> Result<String> {
             ),
         },
     })?;
-    prepare_mtl(&text, path)
+    prepare_mtl(&text, path).map_err(|e| match e {
+        Error::Mesh { path, message } => Error::Mesh {
+            path,
+            message: format!(
+                "{message} (the MTL library named at line {line} of {})",
+                obj.display()
+            ),
+        },
+        e => e,
+    })
 }
 
 /// Parses `text` (the MTL at `path`, named at `line` of `obj`) with `parse`; an error names the
@@ -334,6 +371,12 @@ mod tests {
         assert!(!s.faces_without_usemtl);
         assert_eq!(s.polylines, vec![8]);
         assert!(!s.text.contains("l 1 2 3"));
+        assert!(s.repeated_faces.is_empty());
+        // Repeated from another start vertex (and with its own copies of the vertices): the
+        // same face. Reversed: a different one.
+        let s = scan("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\nf 3 4 1 2\nf 4 3 2 1\nv 1 1 0\nf 1 2 -1 4\n")
+            .unwrap();
+        assert_eq!(s.repeated_faces, HashMap::from([(6, 5), (9, 5)]));
     }
 
     #[test]

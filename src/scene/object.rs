@@ -59,8 +59,11 @@ pub fn load_object(
     }
     if !scan.polylines.is_empty() {
         warned.insert(format!(
-            "{shown}: {} polyline (`l`) elements ignored (first at line {}): they are not surfaces",
-            scan.polylines.len(),
+            "{shown}: {} ignored (first at line {}): they are not surfaces",
+            match scan.polylines.len() {
+                1 => "1 polyline (`l` element)".to_string(),
+                n => format!("{n} polylines (`l` elements)"),
+            },
             scan.polylines[0]
         ));
     }
@@ -131,17 +134,23 @@ pub fn load_object(
                 return Err(mesh_err(
                     &obj_path,
                     format!(
-                        "{}: face is degenerate (zero area): {a}, {b}, {c}",
-                        describe(t)
+                        "{}: face is degenerate (zero area): {:?}",
+                        describe(t),
+                        corners.map(|p| p.to_array())
                     ),
                 ));
             }
-            // The same corners in the same cyclic order are the same one-sided surface twice;
-            // reversed winding is the back-to-back twin of a two-sided wall, and is kept.
+            // The same corners in the same cyclic order are the same one-sided surface twice
+            // (a whole face repeated, or one of its triangles); reversed winding is the
+            // back-to-back twin of a two-sided wall, and is kept.
             let key = canonical(corners.map(|p| p.to_array().map(f64::to_bits)));
-            if let Some(&earlier) = seen.get(&key) {
+            let repeated = lines
+                .and_then(|l| scan.repeated_faces.get(&l[t]))
+                .map(|&earlier| Repeat::Face(earlier))
+                .or_else(|| seen.get(&key).map(|&e| Repeat::Triangle(e)));
+            if let Some(r) = repeated {
                 duplicates += 1;
-                first_duplicate.get_or_insert((t, earlier));
+                first_duplicate.get_or_insert((t, r));
                 continue;
             }
             seen.insert(key, t);
@@ -164,14 +173,24 @@ pub fn load_object(
         return Err(mesh_err(&obj_path, "mesh has no faces".into()));
     }
     if let Some((t, earlier)) = first_duplicate {
+        let earlier = match earlier {
+            Repeat::Face(line) => format!("line {line}"),
+            Repeat::Triangle(e) => describe(e),
+        };
         warned.insert(format!(
-            "{shown}: {duplicates} duplicate {} dropped (the same corners in the same winding as an earlier face; first: {} repeats {})",
+            "{shown}: {duplicates} duplicate {} dropped (the same corners in the same winding as an earlier face; first: {} repeats {earlier})",
             if duplicates == 1 { "triangle" } else { "triangles" },
             describe(t),
-            describe(earlier)
         ));
     }
     Ok(())
+}
+
+/// What a dropped triangle repeats: a face (by its line) or an earlier triangle (by index).
+#[derive(Clone, Copy)]
+enum Repeat {
+    Face(u32),
+    Triangle(usize),
 }
 
 /// The rotation of a triangle's corners that starts with the smallest: equal for the same
@@ -195,17 +214,25 @@ fn check_placed(
     else {
         return Ok(());
     };
-    let message = if src.transform == DMat4::IDENTITY {
-        format!("{}: vertex {p} is beyond ±{MAX_COORDINATE:e} (the largest coordinate magnitude float32 tables handle)", at())
-    } else {
-        format!("{}: `{}` places a vertex at {p}, beyond ±{MAX_COORDINATE:e} (the largest coordinate magnitude float32 tables handle)", at(), src.transform_field)
-    };
+    let why = "the largest coordinate magnitude float32 tables handle";
+    let p = p.to_array();
     Err(if src.transform == DMat4::IDENTITY {
-        mesh_err(obj_path, message)
+        mesh_err(
+            obj_path,
+            format!(
+                "{}: vertex {p:?} is beyond ±{MAX_COORDINATE:e} ({why})",
+                at()
+            ),
+        )
     } else {
         scene_err(
             src.scene_path,
-            format!("{} (mesh {})", message, obj_path.display()),
+            format!(
+                "`{}` places a vertex of {} ({}) at {p:?}, beyond ±{MAX_COORDINATE:e} ({why})",
+                src.transform_field,
+                obj_path.display(),
+                at()
+            ),
         )
     })
 }
@@ -312,7 +339,7 @@ fn material(
         return Err(mesh_err(
             obj_path,
             format!(
-                "material {name}: Ke {} exceeds {:e}: {}",
+                "material {name}: Ke {:?} exceeds {:e}: {}",
                 mat.ke.max_element(),
                 super::MAX_SOURCE,
                 super::load::SOURCE_LIMIT_REASON
