@@ -48,9 +48,10 @@ fn longest_edge(t: &[DVec3; 3]) -> (usize, f64) {
         .unwrap()
 }
 
-/// Bisections below one input triangle never go deeper than this: halving an edge of at most
-/// 2 × [`crate::scene::MAX_COORDINATE`] down to the finest size float64 coordinates of that
-/// magnitude resolve takes ~3 × 2^7 levels, so a deeper path means the size cannot be reached.
+/// Bisections below one input triangle never go deeper than this. float64 tells midpoints
+/// apart down to ~2^-52 of the coordinates' magnitude, about 53 halvings of the longest edge
+/// at a few levels each; a deeper path cannot reach the size (sizes the loader accepts, at
+/// least 1e-9 of the magnitude, need some 100 levels at most).
 pub const MAX_BISECTION_DEPTH: usize = 1024;
 
 /// A lower bound on the leaves bisection makes of a triangle with longest edge `longest` and
@@ -92,8 +93,8 @@ fn unreachable_size(size: f64, t: &[DVec3; 3]) -> Error {
     Error::Setting {
         field: "element_size",
         message: format!(
-            "element size {size} is finer than float64 coordinates can bisect the triangle {}, {}, {} to; use a larger element size",
-            t[0], t[1], t[2]
+            "element size {size:?} is finer than float64 coordinates can bisect the triangle {:?} to; use a larger element size",
+            t.map(|p| p.to_array())
         ),
     }
 }
@@ -130,7 +131,7 @@ pub fn build_elements(scene: &Scene) -> Result<Vec<Element>> {
     if !(size.is_finite() && size > 0.0) {
         return Err(Error::Setting {
             field: "element_size",
-            message: format!("element size must be a positive finite number, got {size}"),
+            message: format!("element size must be a positive finite number, got {size:?}"),
         });
     }
     let limit = scene
@@ -141,7 +142,7 @@ pub fn build_elements(scene: &Scene) -> Result<Vec<Element>> {
         Error::Setting {
         field: "element_size",
         message: format!(
-            "element size {size} would create {} elements, more than {limit} (solver.max_elements, or what this machine can hold); use a larger element size",
+            "element size {size:?} would create {} elements, more than {limit} (solver.max_elements, or what this machine can hold); use a larger element size",
             if at_least.is_finite() { format!("at least {at_least:.3e}") } else { "unboundedly many".into() }
         ),
     }

@@ -33,12 +33,27 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene> {
                 let line = before.matches('\n').count() + 1;
                 let start = before.rfind('\n').map_or(0, |i| i + 1);
                 let col = before.len() - start + 1;
-                // Name the key written on that line, when there is one (`key = value`).
-                let key = text[start..]
-                    .lines()
-                    .next()
-                    .and_then(|l| l.split_once('='))
-                    .map(|(k, _)| k.trim())
+                // Name the key the value belongs to: the last `key =` before the error on its
+                // line (inside an inline table too), else the line's first key.
+                let on_line = &text[start..s.start.min(text.len())];
+                let last_key = on_line
+                    .trim_end()
+                    .strip_suffix('=')
+                    .map(|k| k.trim_end())
+                    .map(|k| {
+                        let from = k
+                            .rfind(|c: char| !(c.is_alphanumeric() || "_-\".'".contains(c)))
+                            .map_or(0, |i| i + 1);
+                        &k[from..]
+                    });
+                let key = last_key
+                    .or_else(|| {
+                        text[start..]
+                            .lines()
+                            .next()
+                            .and_then(|l| l.split_once('='))
+                            .map(|(k, _)| k.trim())
+                    })
                     .filter(|k| !k.is_empty() && !k.starts_with('['))
                     .map_or(String::new(), |k| format!(" (`{k}`)"));
                 format!("line {line}, column {col}{key}: ")
@@ -142,7 +157,7 @@ pub(super) fn source(c: format::Rgb, field: &str, path: &Path) -> Result<DVec3> 
         return Err(scene_err(
             path,
             format!(
-                "`{field}` = {} exceeds {MAX_SOURCE:e}: {SOURCE_LIMIT_REASON}",
+                "`{field}` = {:?} exceeds {MAX_SOURCE:e}: {SOURCE_LIMIT_REASON}",
                 v.max_element()
             ),
         ));
@@ -318,7 +333,7 @@ fn bounded(x: f64, field: &str, path: &Path) -> Result<f64> {
     } else {
         Err(scene_err(
             path,
-            format!("`{field}` entry {x} must be finite and within ±{MAX_COORDINATE:e} (the largest coordinate magnitude float32 tables handle)"),
+            format!("`{field}` entry {x:?} must be finite and within ±{MAX_COORDINATE:e} (the largest coordinate magnitude float32 tables handle)"),
         ))
     }
 }

@@ -237,7 +237,8 @@ fn check_placed(
     })
 }
 
-/// Parses the scanned text with `tobj`, reading MTL libraries through [`obj::load_mtl`].
+/// Parses the scanned text with `tobj`, reading MTL libraries through [`obj::read_mtl`] and
+/// [`obj::parse_mtl`].
 fn parse(scan: &ObjScan, obj_path: &Path) -> Result<(Vec<tobj::Model>, Vec<tobj::Material>)> {
     let opts = tobj::LoadOptions {
         triangulate: true,

@@ -36,7 +36,7 @@ fn positive(v: Option<f64>, default: f64, field: &str, path: &Path) -> Result<f6
         Some(x) if x.is_finite() && x > 0.0 => Ok(x),
         Some(x) => Err(scene_err(
             path,
-            format!("`{field}` must be a positive finite number, got {x}"),
+            format!("`{field}` must be a positive finite number, got {x:?}"),
         )),
     }
 }
@@ -156,7 +156,7 @@ pub fn resolve_element_size(scene: &mut Scene, given: bool, path: &Path) -> Resu
         return Err(scene_err(
             path,
             format!(
-                "`solver.element_size` {size}{origin} is finer than float64 coordinates of magnitude {magnitude:e} can bisect to (at least {:e})",
+                "`solver.element_size` {size:?}{origin} is finer than float64 coordinates of magnitude {magnitude:e} can bisect to (at least {:e})",
                 MIN_RELATIVE_RESOLUTION * magnitude
             ),
         ));
@@ -167,7 +167,7 @@ pub fn resolve_element_size(scene: &mut Scene, given: bool, path: &Path) -> Resu
         return Err(scene_err(
             path,
             format!(
-                "`solver.element_size` {size}{origin} would create at least {estimate:.3e} elements, more than `solver.max_elements` ({limit}); use a larger element size"
+                "`solver.element_size` {size:?}{origin} would create at least {estimate:.3e} elements, more than `solver.max_elements` ({limit}); use a larger element size"
             ),
         ));
     }
