@@ -48,66 +48,128 @@ fn longest_edge(t: &[DVec3; 3]) -> (usize, f64) {
         .unwrap()
 }
 
-/// Number of leaves bisection produces for one triangle (without building them).
-fn count_leaves(t: [DVec3; 3], size: f64, limit: usize) -> usize {
-    let (i, len) = longest_edge(&t);
-    if len <= size || limit <= 1 {
-        return 1;
-    }
-    let (a, b) = split(t, i);
-    let na = count_leaves(a, size, limit);
-    na + count_leaves(b, size, limit.saturating_sub(na))
+/// Bisections below one input triangle never go deeper than this. float64 tells midpoints
+/// apart down to ~2^-52 of the coordinates' magnitude, about 53 halvings of the longest edge
+/// at a few levels each; a deeper path cannot reach the size (sizes the loader accepts, at
+/// least 1e-9 of the magnitude, need some 100 levels at most).
+pub const MAX_BISECTION_DEPTH: usize = 1024;
+
+/// A lower bound on the leaves bisection makes of a triangle with longest edge `longest` and
+/// area `area`: a leaf has no edge over `size`, so at most the equilateral area √3/4·size², and
+/// the longest edge alone is cut into at least `longest / size` pieces. Used to refuse absurd
+/// sizes before anything is subdivided.
+pub fn leaf_lower_bound(longest: f64, area: f64, size: f64) -> f64 {
+    let leaf_area = 3f64.sqrt() / 4.0 * size * size;
+    (area / leaf_area).max(longest / size).max(1.0)
 }
 
-fn split(t: [DVec3; 3], i: usize) -> ([DVec3; 3], [DVec3; 3]) {
+/// [`leaf_lower_bound`] summed over every triangle of `scene` at element size `size`.
+pub fn estimate_elements(scene: &Scene, size: f64) -> f64 {
+    scene
+        .meshes
+        .iter()
+        .flat_map(|m| {
+            m.triangles
+                .iter()
+                .map(|t| t.map(|v| m.positions[v as usize]))
+        })
+        .map(|[a, b, c]| {
+            let longest = (b - a).length().max((c - b).length()).max((a - c).length());
+            leaf_lower_bound(longest, 0.5 * (b - a).cross(c - a).length(), size)
+        })
+        .sum()
+}
+
+/// The two halves of `t` cut at the midpoint of edge `i`, or `None` when the midpoint rounds
+/// onto an end (the coordinates cannot resolve a finer split).
+fn split(t: [DVec3; 3], i: usize) -> Option<([DVec3; 3], [DVec3; 3])> {
     let (p, q, r) = (t[i], t[(i + 1) % 3], t[(i + 2) % 3]);
     let m = (p + q) * 0.5;
-    ([p, m, r], [m, q, r])
+    (m != p && m != q).then_some(([p, m, r], [m, q, r]))
 }
 
-fn subdivide(t: [DVec3; 3], size: f64, out: &mut Vec<[DVec3; 3]>) {
-    let (i, len) = longest_edge(&t);
-    if len <= size {
-        out.push(t);
-    } else {
-        let (a, b) = split(t, i);
-        subdivide(a, size, out);
-        subdivide(b, size, out);
+/// Why a triangle cannot be bisected down to `size`.
+fn unreachable_size(size: f64, t: &[DVec3; 3]) -> Error {
+    Error::Setting {
+        field: "element_size",
+        message: format!(
+            "element size {size:?} is finer than float64 coordinates can bisect the triangle {:?} to; use a larger element size",
+            t.map(|p| p.to_array())
+        ),
     }
+}
+
+/// Bisects `t` until no edge exceeds `size`, calling `leaf` on each piece in depth-first order
+/// (first half before second); stops with `Ok(false)` once `leaf` returns false. An explicit
+/// stack (not recursion): the depth depends on the input.
+fn bisect(t: [DVec3; 3], size: f64, mut leaf: impl FnMut([DVec3; 3]) -> bool) -> Result<bool> {
+    let mut stack = vec![(t, 0usize)];
+    while let Some((t, depth)) = stack.pop() {
+        let (i, len) = longest_edge(&t);
+        if len <= size {
+            if !leaf(t) {
+                return Ok(false);
+            }
+            continue;
+        }
+        match split(t, i) {
+            Some((a, b)) if depth < MAX_BISECTION_DEPTH && len.is_finite() => {
+                stack.push((b, depth + 1));
+                stack.push((a, depth + 1));
+            }
+            _ => return Err(unreachable_size(size, &t)),
+        }
+    }
+    Ok(true)
 }
 
 /// Splits every triangle of the scene into elements no longer than `settings.element_size`.
-/// Refuses (before allocating) if the count would exceed `settings.max_elements`.
+/// Refuses (before allocating) if the count would exceed `settings.max_elements` or what this
+/// machine can hold ([`crate::scene::max_elements_limit`]).
 pub fn build_elements(scene: &Scene, settings: &SolverSettings) -> Result<Vec<Element>> {
     let size = settings.element_size;
-    let limit = settings.max_elements;
+    if !(size.is_finite() && size > 0.0) {
+        return Err(Error::Setting {
+            field: "element_size",
+            message: format!("element size must be a positive finite number, got {size:?}"),
+        });
+    }
+    let limit = settings
+        .max_elements
+        .min(crate::scene::max_elements_limit());
+    let too_many = |at_least: f64| {
+        Error::Setting {
+        field: "element_size",
+        message: format!(
+            "element size {size:?} would create {} elements, more than {limit} (solver.max_elements, or what this machine can hold); use a larger element size",
+            if at_least.is_finite() { format!("at least {at_least:.3e}") } else { "unboundedly many".into() }
+        ),
+    }
+    };
+    // The area bound first: counting leaf by leaf would take as long as the count is large.
+    let estimate = estimate_elements(scene, size);
+    if !(estimate <= limit as f64) {
+        return Err(too_many(estimate));
+    }
     let mut count = 0usize;
     for m in &scene.meshes {
         for tri in &m.triangles {
-            count += count_leaves(
-                tri.map(|v| m.positions[v as usize]),
-                size,
-                limit + 1 - count.min(limit),
-            );
-            if count > limit {
-                return Err(Error::Setting {
-                    field: "element_size",
-                    message: format!(
-                        "element size {size} would create more than {limit} elements (solver.max_elements); use a larger element size"
-                    ),
-                });
+            let complete = bisect(tri.map(|v| m.positions[v as usize]), size, |_| {
+                count += 1;
+                count <= limit
+            })?;
+            if !complete {
+                return Err(too_many((limit + 1) as f64));
             }
         }
     }
     let mut elements = Vec::with_capacity(count);
-    let mut pieces = Vec::new();
     for (mi, m) in scene.meshes.iter().enumerate() {
         for (ti, tri) in m.triangles.iter().enumerate() {
-            pieces.clear();
-            subdivide(tri.map(|v| m.positions[v as usize]), size, &mut pieces);
-            for p in &pieces {
-                elements.push(Element::new(*p, m.material[ti], mi as u32, ti as u32));
-            }
+            bisect(tri.map(|v| m.positions[v as usize]), size, |p| {
+                elements.push(Element::new(p, m.material[ti], mi as u32, ti as u32));
+                true
+            })?;
         }
     }
     Ok(elements)
@@ -144,5 +206,113 @@ mod tests {
         s.solver.max_elements = 10;
         let err = build_elements(&s, &s.solver).unwrap_err().to_string();
         assert!(err.contains("element_size"), "{err}");
+    }
+
+    /// The recursion `build_elements` replaced; its leaf order is what the goldens depend on.
+    fn recursive(t: [DVec3; 3], size: f64, out: &mut Vec<[DVec3; 3]>) {
+        let (i, len) = longest_edge(&t);
+        if len <= size {
+            out.push(t);
+        } else {
+            let (a, b) = split(t, i).unwrap();
+            recursive(a, size, out);
+            recursive(b, size, out);
+        }
+    }
+
+    #[test]
+    fn explicit_stack_keeps_the_recursive_leaf_order() {
+        let tris = [
+            [
+                DVec3::ZERO,
+                DVec3::new(3.0, 0.0, 0.0),
+                DVec3::new(0.0, 0.1, 2.0),
+            ],
+            // A sliver and an obtuse triangle.
+            [
+                DVec3::ZERO,
+                DVec3::new(5.0, 0.0, 0.0),
+                DVec3::new(2.5, 1e-3, 0.0),
+            ],
+            [
+                DVec3::new(-1.0, 0.0, 0.0),
+                DVec3::new(1.0, 0.0, 0.0),
+                DVec3::new(0.1, 0.2, 0.3),
+            ],
+        ];
+        for t in tris {
+            let mut s = Scene::empty();
+            let mat = s.add_material(Material::diffuse("w", 0.5));
+            s.add_mesh("t", t.to_vec(), vec![[0, 1, 2]], mat);
+            s.solver.element_size = 0.07;
+            let got: Vec<[DVec3; 3]> = build_elements(&s, &s.solver)
+                .unwrap()
+                .iter()
+                .map(|e| e.corners)
+                .collect();
+            let mut want = Vec::new();
+            recursive(t, 0.07, &mut want);
+            assert!(got.len() > 50, "{}", got.len());
+            assert_eq!(got, want);
+        }
+    }
+
+    /// Sizes no bisection can reach are errors, quickly, never a stack overflow or a hang.
+    #[test]
+    fn unreachable_sizes_are_refused() {
+        let mut s = Scene::empty();
+        let mat = s.add_material(Material::diffuse("w", 0.5));
+        let tri = |s: &mut Scene, k: f64, at: f64| {
+            let p = [DVec3::ZERO, DVec3::X, DVec3::Y].map(|v| v * k + DVec3::splat(at));
+            s.meshes.clear();
+            s.add_mesh("t", p.to_vec(), vec![[0, 1, 2]], mat);
+        };
+        s.solver.max_elements = usize::MAX;
+        let cases = [
+            (1e30, 0.0, 0.25, "more than"),
+            (1.0, 0.0, 5e-324, "more than"),
+            (1.0, 0.0, 1e-6, "more than"),
+            (1.0, 0.0, -0.5, "positive"),
+            (1.0, 0.0, f64::NAN, "positive"),
+            // Edges of 100 at 1e17, where float64 steps by 16: bisection stalls above size 1.
+            (100.0, 1e17, 1.0, "finer than float64"),
+        ];
+        for (k, at, size, want) in cases {
+            tri(&mut s, k, at);
+            s.solver.element_size = size;
+            let t = std::time::Instant::now();
+            let e = build_elements(&s, &s.solver).unwrap_err().to_string();
+            assert!(
+                e.contains(want) && e.contains("element_size"),
+                "{k} {size}: {e}"
+            );
+            assert!(
+                t.elapsed().as_secs_f64() < 1.0,
+                "{k} {size}: took {:?}",
+                t.elapsed()
+            );
+        }
+    }
+
+    #[test]
+    fn the_estimate_never_exceeds_the_count() {
+        let mut s = Scene::empty();
+        let mat = s.add_material(Material::diffuse("w", 0.5));
+        let p = vec![
+            DVec3::ZERO,
+            DVec3::new(3.0, 0.0, 0.0),
+            DVec3::new(0.0, 0.1, 2.0),
+            DVec3::new(1.0, 1.0, 1.0),
+        ];
+        s.add_mesh("t", p, vec![[0, 1, 2], [0, 1, 3], [1, 2, 3]], mat);
+        for size in [10.0, 1.0, 0.3, 0.05, 0.01] {
+            s.solver.element_size = size;
+            let n = build_elements(&s, &s.solver).unwrap().len() as f64;
+            let est = estimate_elements(&s, size);
+            assert!(
+                est <= n && est >= 0.2 * n,
+                "size {size}: estimate {est}, count {n}"
+            );
+        }
     }
 }

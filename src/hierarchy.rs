@@ -46,6 +46,7 @@ pub struct Hierarchy {
 
 impl Hierarchy {
     /// Builds a binary tree by median splits along the longest axis of the element centroids.
+    /// Iterative (an explicit stack in pre-order), so no input can exhaust the call stack.
     pub fn build(elements: &[Element]) -> Self {
         assert!(!elements.is_empty(), "hierarchy needs at least one element");
         let mut h = Hierarchy {
@@ -54,11 +55,67 @@ impl Hierarchy {
             leaves: Vec::with_capacity(elements.len()),
         };
         let mut idx: Vec<u32> = (0..elements.len() as u32).collect();
-        h.build_rec(elements, &mut idx, u32::MAX, 0);
+        // A cluster is finished once both subtrees are built: its right child starts where
+        // the left subtree ends, and the cluster ends where the right subtree does.
+        enum Task {
+            Visit {
+                range: std::ops::Range<usize>,
+                parent: u32,
+                depth: u32,
+            },
+            Finish(u32),
+        }
+        let mut stack = vec![Task::Visit {
+            range: 0..idx.len(),
+            parent: u32::MAX,
+            depth: 0,
+        }];
+        while let Some(task) = stack.pop() {
+            match task {
+                Task::Visit {
+                    range,
+                    parent,
+                    depth,
+                } => {
+                    let slice = &mut idx[range.clone()];
+                    if let Some(mid) = h.add_node(elements, slice, parent, depth) {
+                        let me = h.nodes.len() as u32 - 1;
+                        let split = range.start + mid;
+                        stack.push(Task::Finish(me));
+                        stack.push(Task::Visit {
+                            range: split..range.end,
+                            parent: me,
+                            depth: depth + 1,
+                        });
+                        stack.push(Task::Visit {
+                            range: range.start..split,
+                            parent: me,
+                            depth: depth + 1,
+                        });
+                    }
+                }
+                Task::Finish(me) => {
+                    let l = me + 1;
+                    let r = h.nodes[l as usize].end;
+                    let end = h.nodes.len() as u32;
+                    let node = &mut h.nodes[me as usize];
+                    node.kind = NodeKind::Cluster([l, r]);
+                    node.end = end;
+                }
+            }
+        }
         h
     }
 
-    fn build_rec(&mut self, els: &[Element], idx: &mut [u32], parent: u32, depth: u32) -> u32 {
+    /// Appends the node over `idx` (a leaf when it holds one element). For a cluster, orders
+    /// `idx` around the median along the longest axis and returns the split position.
+    fn add_node(
+        &mut self,
+        els: &[Element],
+        idx: &mut [u32],
+        parent: u32,
+        depth: u32,
+    ) -> Option<usize> {
         let me = self.nodes.len() as u32;
         let area: f64 = idx.iter().map(|&i| els[i as usize].area).sum();
         let center = if area > 0.0 {
@@ -87,7 +144,7 @@ impl Hierarchy {
             self.nodes[me as usize].kind = NodeKind::Leaf(idx[0]);
             self.leaf_of_element[idx[0] as usize] = me;
             self.leaves.push(me);
-            return me;
+            return None;
         }
         let (lo, hi) = idx.iter().fold(
             (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
@@ -112,14 +169,7 @@ impl Hierarchy {
         let key = |i: u32| q(els[i as usize].center[axis] - lo[axis]);
         let mid = idx.len() / 2;
         idx.select_nth_unstable_by(mid, |&a, &b| key(a).cmp(&key(b)).then(a.cmp(&b)));
-        let (left, right) = idx.split_at_mut(mid);
-        let l = self.build_rec(els, left, me, depth + 1);
-        let r = self.build_rec(els, right, me, depth + 1);
-        let end = self.nodes.len() as u32;
-        let node = &mut self.nodes[me as usize];
-        node.kind = NodeKind::Cluster([l, r]);
-        node.end = end;
-        me
+        Some(mid)
     }
 
     /// Number of nodes (rows).
@@ -159,6 +209,57 @@ mod tests {
     use super::*;
     use crate::elements::build_elements;
     use crate::scene::{Material, Scene};
+
+    /// The recursion `Hierarchy::build` replaced; its node order is what the goldens depend on.
+    fn recursive(
+        h: &mut Hierarchy,
+        els: &[Element],
+        idx: &mut [u32],
+        parent: u32,
+        depth: u32,
+    ) -> u32 {
+        let me = h.nodes.len() as u32;
+        let Some(mid) = h.add_node(els, idx, parent, depth) else {
+            return me;
+        };
+        let (left, right) = idx.split_at_mut(mid);
+        let l = recursive(h, els, left, me, depth + 1);
+        let r = recursive(h, els, right, me, depth + 1);
+        let end = h.nodes.len() as u32;
+        let node = &mut h.nodes[me as usize];
+        node.kind = NodeKind::Cluster([l, r]);
+        node.end = end;
+        me
+    }
+
+    #[test]
+    fn explicit_stack_builds_the_recursive_tree() {
+        let mut s = Scene::empty();
+        let m = s.add_material(Material::diffuse("w", 0.5));
+        let p = vec![
+            DVec3::ZERO,
+            DVec3::new(2.0, 0.0, 0.0),
+            DVec3::new(2.0, 1.0, 0.3),
+            DVec3::new(0.0, 1.5, 0.0),
+            DVec3::new(1.0, 0.5, 2.0),
+        ];
+        s.add_mesh("q", p, vec![[0, 1, 2], [0, 2, 3], [1, 2, 4], [3, 4, 0]], m);
+        for size in [3.0, 0.5, 0.1] {
+            s.solver.element_size = size;
+            let els = build_elements(&s, &s.solver).unwrap();
+            let got = Hierarchy::build(&els);
+            let mut want = Hierarchy {
+                nodes: Vec::new(),
+                leaf_of_element: vec![0; els.len()],
+                leaves: Vec::new(),
+            };
+            let mut idx: Vec<u32> = (0..els.len() as u32).collect();
+            recursive(&mut want, &els, &mut idx, u32::MAX, 0);
+            assert_eq!(got.nodes, want.nodes, "size {size}");
+            assert_eq!(got.leaves, want.leaves);
+            assert_eq!(got.leaf_of_element, want.leaf_of_element);
+        }
+    }
 
     #[test]
     fn subtrees_are_contiguous_ranges() {

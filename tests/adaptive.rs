@@ -404,7 +404,10 @@ fn info_memory_equals_what_profile_reads_from_the_device() {
                 }
                 m
             };
-            println!("{name} all_passes={all_passes}: {:?}", solver(&info.memory_bytes));
+            println!(
+                "{name} all_passes={all_passes}: {:?}",
+                solver(&info.memory_bytes)
+            );
             assert_eq!(
                 solver(&info.memory_bytes),
                 solver(&profile.memory_bytes),

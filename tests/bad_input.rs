@@ -83,9 +83,23 @@ fn degenerate_and_duplicate_faces() {
     write(&d, "m.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
     let p = write(&d, "s.toml", "[[object]]\nmesh = \"m.obj\"\n");
     expect_error(&p, &["m.obj", "degenerate"]);
-    write(&d, "dup.obj", &format!("{QUAD}f 1 2 3 4\n"));
+    // Duplicates are dropped with one warning per mesh (issue 18); the reversed winding is a
+    // back-to-back twin and stays.
+    write(&d, "dup.obj", &format!("{QUAD}f 1 2 3 4\nf 4 3 2 1\n"));
     let p = write(&d, "s2.toml", "[[object]]\nmesh = \"dup.obj\"\n");
-    expect_error(&p, &["dup.obj", "duplicates"]);
+    let s = load_scene(&p).unwrap();
+    assert_eq!(s.triangle_count(), 4);
+    let dup: Vec<&String> = s
+        .warnings
+        .iter()
+        .filter(|w| w.contains("duplicate"))
+        .collect();
+    assert_eq!(dup.len(), 1, "{:?}", s.warnings);
+    assert!(
+        dup[0].contains("dup.obj") && dup[0].contains("2 duplicate triangles"),
+        "{}",
+        dup[0]
+    );
 }
 
 #[test]
@@ -168,4 +182,129 @@ fn expect_file(text: &str) -> Option<String> {
     text.lines()
         .find_map(|l| l.strip_prefix("mesh = \""))
         .map(|m| m.trim_end_matches('"').to_string())
+}
+
+/// Loads on another thread: a loader that opened a FIFO would block forever, and this fails
+/// after a few seconds instead of hanging the suite.
+fn load_within_seconds(scene: &Path) -> Result<antiradiance::Scene, String> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    let p = scene.to_path_buf();
+    std::thread::spawn(move || {
+        let _ = tx.send(load_scene(&p).map_err(|e| e.to_string()));
+    });
+    rx.recv_timeout(std::time::Duration::from_secs(5))
+        .expect("loading did not finish within 5 s")
+}
+
+/// Paths that are not regular files say what they are, and are never read (a FIFO would
+/// block the open, `/dev/zero` would never end): these cannot live in the corpus.
+#[cfg(unix)]
+#[test]
+fn mesh_paths_that_are_not_files_say_what_they_are() {
+    let d = dir("paths");
+    let mesh = |name: &str| {
+        let p = write(
+            &d,
+            &format!("{name}.toml"),
+            &format!("[[object]]\nmesh = \"{name}\"\n"),
+        );
+        let e = load_within_seconds(&p).expect_err("accepted");
+        assert!(!e.contains('\n'), "{e}");
+        assert!(e.contains("`object[0].mesh`: ") && e.contains(name), "{e}");
+        e
+    };
+    let fifo = d.join("fifo.obj");
+    let _ = std::fs::remove_file(&fifo);
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    if made.is_ok_and(|s| s.success()) {
+        assert!(mesh("fifo.obj").contains("is a named pipe (FIFO), not a regular file"));
+    }
+    for (link, to) in [("loop-a.obj", "loop-b.obj"), ("loop-b.obj", "loop-a.obj")] {
+        let _ = std::fs::remove_file(d.join(link));
+        std::os::unix::fs::symlink(d.join(to), d.join(link)).unwrap();
+    }
+    assert!(mesh("loop-a.obj").contains("is a symbolic link loop"));
+    let _ = std::fs::remove_file(d.join("dangling.obj"));
+    std::os::unix::fs::symlink(d.join("gone.obj"), d.join("dangling.obj")).unwrap();
+    assert!(mesh("dangling.obj").contains("gone.obj, which does not exist"));
+    std::fs::create_dir_all(d.join("folder.obj")).unwrap();
+    assert!(mesh("folder.obj").contains("is a directory, not a file"));
+    assert!(mesh("/dev/zero").contains("is a character device, not a regular file"));
+    // The scene file itself too.
+    let e = load_within_seconds(Path::new("/dev/zero")).unwrap_err();
+    assert!(
+        e.contains("/dev/zero: scene file is a character device"),
+        "{e}"
+    );
+    let e = load_within_seconds(&d).unwrap_err();
+    assert!(e.contains("scene file is a directory"), "{e}");
+}
+
+#[test]
+fn scene_files_that_are_not_utf8_text_say_so() {
+    let d = dir("encoding");
+    let latin1 = d.join("latin1.toml");
+    std::fs::write(&latin1, b"# sc\xe8ne\n[[object]]\nmesh = \"q.obj\"\n").unwrap();
+    expect_error(&latin1, &["latin1.toml", "not UTF-8", "line 1"]);
+    let binary = d.join("binary.toml");
+    std::fs::write(&binary, b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR").unwrap();
+    expect_error(&binary, &["binary.toml", "binary file"]);
+}
+
+/// Sizes that would recurse or allocate without bound are refused at load, quickly, whatever
+/// `max_elements` allows.
+#[test]
+fn absurd_sizes_are_refused_quickly() {
+    let d = dir("sizes");
+    write(&d, "q.obj", QUAD);
+    let machine = antiradiance::scene::max_elements_limit();
+    for (toml, field) in [
+        (
+            format!("[solver]\nelement_size = 1e-6\nmax_elements = {machine}\n"),
+            "max_elements",
+        ),
+        (
+            "[solver]\nelement_size = 5e-324\n".to_string(),
+            "solver.element_size",
+        ),
+        (
+            "[solver]\niterations = 1000000000000\n".to_string(),
+            "solver.iterations",
+        ),
+        (
+            "[solver]\nantiradiance_steps = 1000000000000\n".to_string(),
+            "solver.antiradiance_steps",
+        ),
+    ] {
+        let p = write(
+            &d,
+            "s.toml",
+            &format!("{toml}[[object]]\nmesh = \"q.obj\"\n"),
+        );
+        let t = std::time::Instant::now();
+        expect_error(&p, &["s.toml", field]);
+        assert!(t.elapsed().as_secs_f64() < 1.0, "{toml}: {:?}", t.elapsed());
+    }
+    for (obj, object) in [
+        ("v 0 0 0\nv 1e30 0 0\nv 0 1e30 0\nf 1 2 3\n", ""),
+        (QUAD, "scale = 1e30\n"),
+        (
+            QUAD,
+            "matrix = [[1e30, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]\n",
+        ),
+    ] {
+        write(&d, "m.obj", obj);
+        let p = write(
+            &d,
+            "s.toml",
+            &format!("[[object]]\nmesh = \"m.obj\"\n{object}"),
+        );
+        let t = std::time::Instant::now();
+        expect_error(&p, &["1e15"]);
+        assert!(
+            t.elapsed().as_secs_f64() < 1.0,
+            "{object}: {:?}",
+            t.elapsed()
+        );
+    }
 }

@@ -1,16 +1,83 @@
 //! The TOML scene file as written on disk (serde structs). `load.rs` validates and resolves it.
 
+use serde::de::{self, Deserializer, SeqAccess, Visitor};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 
+/// An array of exactly `N` values: serde's fixed-size arrays silently drop extra elements,
+/// so a longer (or shorter) array is an error naming its length.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Exactly<T, const N: usize>(pub [T; N]);
+
+/// Three coordinates or components.
+pub type Xyz = Exactly<f64, 3>;
+
+impl<'de, T: Deserialize<'de>, const N: usize> Deserialize<'de> for Exactly<T, N> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let v = Vec::<T>::deserialize(d)?;
+        let n = v.len();
+        v.try_into()
+            .map(Exactly)
+            .map_err(|_| de::Error::invalid_length(n, &format!("an array of {N} values").as_str()))
+    }
+}
+
+/// A number or an array of three numbers (colours, per-axis scales). Written out by hand so
+/// that an array of the wrong length says so, where an untagged enum would only say that no
+/// variant matched.
+struct NumberOrTriple(&'static str);
+
+/// What [`NumberOrTriple`] read.
+enum OneOrThree {
+    One(f64),
+    Three([f64; 3]),
+}
+
+impl<'de> Visitor<'de> for NumberOrTriple {
+    type Value = OneOrThree;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        write!(f, "a number or an array of 3 numbers ({})", self.0)
+    }
+    fn visit_f64<E: de::Error>(self, v: f64) -> Result<Self::Value, E> {
+        Ok(OneOrThree::One(v))
+    }
+    fn visit_i64<E: de::Error>(self, v: i64) -> Result<Self::Value, E> {
+        Ok(OneOrThree::One(v as f64))
+    }
+    fn visit_u64<E: de::Error>(self, v: u64) -> Result<Self::Value, E> {
+        Ok(OneOrThree::One(v as f64))
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
+        let mut v = Vec::new();
+        while let Some(x) = seq.next_element::<f64>()? {
+            v.push(x);
+        }
+        let n = v.len();
+        v.try_into()
+            .map(OneOrThree::Three)
+            .map_err(|_| de::Error::invalid_length(n, &self))
+    }
+}
+
 /// An RGB value written either as one number (grey) or as `[r, g, b]`.
-#[derive(Debug, Clone, Copy, Deserialize)]
-#[serde(untagged)]
+#[derive(Debug, Clone, Copy)]
 pub enum Rgb {
     /// Same value in all three channels.
     Grey(f64),
     /// Per-channel value.
     Rgb([f64; 3]),
+}
+
+impl<'de> Deserialize<'de> for Rgb {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        Ok(
+            match d.deserialize_any(NumberOrTriple("grey or r, g, b"))? {
+                OneOrThree::One(g) => Rgb::Grey(g),
+                OneOrThree::Three(c) => Rgb::Rgb(c),
+            },
+        )
+    }
 }
 
 impl Rgb {
@@ -24,13 +91,23 @@ impl Rgb {
 }
 
 /// A uniform or per-axis scale.
-#[derive(Debug, Clone, Copy, Deserialize)]
-#[serde(untagged)]
+#[derive(Debug, Clone, Copy)]
 pub enum Scale {
     /// Same factor on every axis.
     Uniform(f64),
     /// Per-axis factors.
     Axes([f64; 3]),
+}
+
+impl<'de> Deserialize<'de> for Scale {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        Ok(
+            match d.deserialize_any(NumberOrTriple("uniform or x, y, z"))? {
+                OneOrThree::One(k) => Scale::Uniform(k),
+                OneOrThree::Three(a) => Scale::Axes(a),
+            },
+        )
+    }
 }
 
 /// Root of a scene file.
@@ -57,14 +134,16 @@ pub struct SceneFile {
 pub struct ObjectDesc {
     /// OBJ path, relative to the scene file.
     pub mesh: String,
-    /// Scale applied first.
+    /// Scale applied first: non-zero factors of magnitude at most
+    /// [`super::MAX_COORDINATE`].
     pub scale: Option<Scale>,
     /// Rotation applied second.
     pub rotate: Option<RotateDesc>,
-    /// Translation applied last.
-    pub translate: Option<[f64; 3]>,
-    /// Full 4×4 row-major object-to-world matrix; excludes scale/rotate/translate.
-    pub matrix: Option<[[f64; 4]; 4]>,
+    /// Translation applied last (components of magnitude at most [`super::MAX_COORDINATE`]).
+    pub translate: Option<Xyz>,
+    /// Full 4×4 row-major object-to-world matrix; excludes scale/rotate/translate. Entries of
+    /// magnitude at most [`super::MAX_COORDINATE`], invertible.
+    pub matrix: Option<Exactly<Exactly<f64, 4>, 4>>,
     /// Overrides of MTL materials by name.
     #[serde(default)]
     pub materials: BTreeMap<String, MaterialOverride>,
@@ -74,8 +153,8 @@ pub struct ObjectDesc {
 #[derive(Debug, Clone, Copy, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RotateDesc {
-    /// Rotation axis (normalized on load).
-    pub axis: [f64; 3],
+    /// Rotation axis (non-zero, normalized on load).
+    pub axis: Xyz,
     /// Angle in degrees.
     pub angle_deg: f64,
 }
@@ -90,91 +169,91 @@ pub struct MaterialOverride {
     pub ks: Option<Rgb>,
     /// Phong exponent.
     pub ns: Option<f64>,
-    /// Emitted radiance (one-sided, front face).
+    /// Emitted radiance (one-sided, front face), at most [`super::MAX_SOURCE`].
     pub ke: Option<Rgb>,
 }
 
-/// One `[[light]]`.
+/// One `[[light]]`: `type` says which of the optional fields it needs. One flat struct rather
+/// than an internally tagged enum, because serde lets unknown keys through such an enum's
+/// variants; `load` checks that exactly the fields of the light's type are given.
 #[derive(Debug, Deserialize)]
-#[serde(tag = "type", rename_all = "lowercase")]
-pub enum LightDesc {
-    /// Parallel light.
-    Directional {
-        /// Direction in which light travels.
-        direction: [f64; 3],
-        /// Irradiance (W/m²) on a surface facing the light.
-        irradiance: Rgb,
-    },
-    /// Isotropic point light.
-    Point {
-        /// Position.
-        position: [f64; 3],
-        /// Radiant intensity (W/sr).
-        intensity: Rgb,
-    },
-    /// Spot light with a linear angular fall-off.
-    Spot {
-        /// Position.
-        position: [f64; 3],
-        /// Point on the axis.
-        target: [f64; 3],
-        /// Intensity on the axis (W/sr).
-        intensity: Rgb,
-        /// Full angle from the axis at which intensity reaches zero.
-        cutoff_deg: f64,
-        /// Angle from the axis inside which intensity is full.
-        beam_width_deg: f64,
-    },
+#[serde(deny_unknown_fields)]
+pub struct LightDesc {
+    /// `"directional"`, `"point"` or `"spot"`.
+    #[serde(rename = "type")]
+    pub kind: String,
+    /// Directional: direction in which light travels (non-zero).
+    pub direction: Option<Xyz>,
+    /// Directional: irradiance (W/m²) on a surface facing the light, in
+    /// [0, [`super::MAX_SOURCE`]].
+    pub irradiance: Option<Rgb>,
+    /// Point and spot: position.
+    pub position: Option<Xyz>,
+    /// Point and spot: radiant intensity (W/sr; on the axis for a spot), in
+    /// [0, [`super::MAX_SOURCE`]].
+    pub intensity: Option<Rgb>,
+    /// Spot: a point on the axis (not the position).
+    pub target: Option<Xyz>,
+    /// Spot: angle from the axis at which intensity reaches zero, in (0, 180].
+    pub cutoff_deg: Option<f64>,
+    /// Spot: angle from the axis inside which intensity is full, in [0, cutoff_deg].
+    pub beam_width_deg: Option<f64>,
 }
 
 /// `[environment]`.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct EnvironmentDesc {
-    /// Constant radiance arriving from every direction not blocked by geometry.
+    /// Constant radiance arriving from every direction not blocked by geometry, in
+    /// [0, [`super::MAX_SOURCE`]].
     pub radiance: Rgb,
 }
 
-/// `[camera]`.
+/// `[camera]`. Positions have components of magnitude at most [`super::MAX_COORDINATE`].
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CameraDesc {
     /// Eye position.
-    pub eye: [f64; 3],
-    /// Point looked at.
-    pub target: [f64; 3],
-    /// Up vector.
-    pub up: Option<[f64; 3]>,
-    /// Vertical field of view in degrees.
+    pub eye: Xyz,
+    /// Point looked at (not the eye).
+    pub target: Xyz,
+    /// Up vector (default +y; not parallel to the view direction).
+    pub up: Option<Xyz>,
+    /// Vertical field of view in degrees, in (0, 180) (default 40).
     pub fov_y_deg: Option<f64>,
-    /// Image width in pixels.
+    /// Image width in pixels, 1..=16384 (default 512).
     pub width: Option<i64>,
-    /// Image height in pixels.
+    /// Image height in pixels, 1..=16384 (default 512).
     pub height: Option<i64>,
 }
 
-/// `[solver]`.
+/// `[solver]`; [`super::SolverSettings`] has the defaults and the ranges.
 #[derive(Debug, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 pub struct SolverDesc {
-    /// Number of directional bins `m`.
+    /// Number of directional bins `m` (a count that lays out as a grid).
     pub bins: Option<i64>,
-    /// Number of iterations.
+    /// Number of iterations, 1..=[`super::MAX_ITERATIONS`].
     pub iterations: Option<i64>,
     /// `"symmetric"` or `"asymmetric"`.
     pub scheme: Option<String>,
-    /// Longest edge of a leaf element (scene units).
+    /// Longest edge of a leaf element, absolute (scene units); finite, positive, and giving at
+    /// most `max_elements` elements. Absent: [`super::RELATIVE_ELEMENT_SIZE`] × the scene's
+    /// bounding-box diagonal.
     pub element_size: Option<f64>,
-    /// Link oracle threshold τ: refine while a node subtends more than τ·ω_bin.
+    /// Link oracle threshold τ (finite, positive): refine while a node subtends more than
+    /// τ·ω_bin.
     pub oracle: Option<f64>,
-    /// Antiradiance steps per radiance step in the asymmetric scheme.
+    /// Antiradiance steps per radiance step in the asymmetric scheme,
+    /// 1..=[`super::MAX_ANTIRADIANCE_STEPS`].
     pub antiradiance_steps: Option<i64>,
     /// `"f16"` or `"f32"` GPU tables.
     pub precision: Option<String>,
-    /// Upper bound on leaf elements (refuses scenes that would exceed it).
+    /// Upper bound on leaf elements (refuses scenes that would exceed it),
+    /// 1..=[`super::max_elements_limit`].
     pub max_elements: Option<i64>,
-    /// Residual target (iterate until the estimated error is below it).
+    /// Residual target in (0, 1) (iterate until the estimated error is below it).
     pub tolerance: Option<f64>,
-    /// Iteration cap when a tolerance is given.
+    /// Iteration cap when a tolerance is given, 1..=[`super::MAX_ITERATIONS`].
     pub max_iterations: Option<i64>,
 }

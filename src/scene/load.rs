@@ -1,17 +1,24 @@
-//! Loading and validating a TOML scene and its OBJ/MTL meshes. Every error names the file and field.
+//! Loading and validating a TOML scene and its OBJ/MTL meshes. Every error names the file and
+//! field; every number is checked against its range before any meshing or device work.
 
-use super::format::{self, LightDesc, SceneFile};
-use super::{Camera, Light, Material, Mesh, Precision, Scene, Scheme, SolverSettings};
+use super::files::{self, FileProblem};
+use super::format::{self, LightDesc, SceneFile, Xyz};
+use super::object::{load_object, ObjectSource};
+use super::settings::{resolve_element_size, solver_settings};
+use super::{Camera, Light, Scene, MAX_COORDINATE, MAX_SOURCE};
 use crate::error::{Error, Result};
 use glam::{DMat3, DMat4, DVec3};
-use std::collections::{BTreeSet, HashSet};
-use std::path::{Path, PathBuf};
+use std::collections::BTreeSet;
+use std::path::Path;
+
+/// Why a source brighter than [`MAX_SOURCE`] is refused.
+pub const SOURCE_LIMIT_REASON: &str = "multiplied by areas, 1/r² and interreflection (up to 1e4×) it would overflow float32 tables and images";
 
 /// Reads and validates a scene file; mesh paths are relative to it.
 pub fn load_scene(path: &Path) -> Result<Scene> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
-        path: path.into(),
-        source,
+    let text = files::read_text(path, "scene").map_err(|p| match p {
+        FileProblem::Path(m) => scene_err(path, format!("scene file {m}")),
+        FileProblem::Content(m) => scene_err(path, m),
     })?;
     parse_scene(&text, path)
 }
@@ -26,12 +33,27 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene> {
                 let line = before.matches('\n').count() + 1;
                 let start = before.rfind('\n').map_or(0, |i| i + 1);
                 let col = before.len() - start + 1;
-                // Name the key written on that line, when there is one (`key = value`).
-                let key = text[start..]
-                    .lines()
-                    .next()
-                    .and_then(|l| l.split_once('='))
-                    .map(|(k, _)| k.trim())
+                // Name the key the value belongs to: the last `key =` before the error on its
+                // line (inside an inline table too), else the line's first key.
+                let on_line = &text[start..s.start.min(text.len())];
+                let last_key = on_line
+                    .trim_end()
+                    .strip_suffix('=')
+                    .map(|k| k.trim_end())
+                    .map(|k| {
+                        let from = k
+                            .rfind(|c: char| !(c.is_alphanumeric() || "_-\".'".contains(c)))
+                            .map_or(0, |i| i + 1);
+                        &k[from..]
+                    });
+                let key = last_key
+                    .or_else(|| {
+                        text[start..]
+                            .lines()
+                            .next()
+                            .and_then(|l| l.split_once('='))
+                            .map(|(k, _)| k.trim())
+                    })
                     .filter(|k| !k.is_empty() && !k.starts_with('['))
                     .map_or(String::new(), |k| format!(" (`{k}`)"));
                 format!("line {line}, column {col}{key}: ")
@@ -42,6 +64,10 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene> {
     let base = path.parent().unwrap_or(Path::new("."));
     let mut scene = Scene::empty();
     scene.path = Some(path.to_path_buf());
+    let given_size = file
+        .solver
+        .as_ref()
+        .is_some_and(|s| s.element_size.is_some());
     if let Some(s) = &file.solver {
         scene.solver = solver_settings(s, path)?;
     }
@@ -49,7 +75,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene> {
         scene.camera = camera(c, path)?;
     }
     if let Some(env) = &file.environment {
-        scene.environment = color(env.radiance, "environment.radiance", path)?;
+        scene.environment = source(env.radiance, "environment.radiance", path)?;
     }
     for (i, l) in file.light.iter().enumerate() {
         scene.lights.push(light(l, i, path)?);
@@ -62,38 +88,57 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene> {
     }
     let mut warned = BTreeSet::new();
     for (i, o) in file.object.iter().enumerate() {
-        load_object(&mut scene, o, i, base, path, &mut warned)?;
+        let (transform, transform_field) = transform(o, i, path)?;
+        let src = ObjectSource {
+            index: i,
+            scene_path: path,
+            base,
+            transform,
+            transform_field,
+        };
+        load_object(&mut scene, o, &src, &mut warned)?;
     }
+    resolve_element_size(&mut scene, given_size, path)?;
     scene.warnings = warned.into_iter().collect();
     Ok(scene)
 }
 
-fn scene_err(path: &Path, message: String) -> Error {
+/// An error in the scene file.
+pub(super) fn scene_err(path: &Path, message: String) -> Error {
     Error::Scene {
         path: path.into(),
         message,
     }
 }
 
-fn mesh_err(path: &Path, message: String) -> Error {
+/// An error in a mesh (OBJ or MTL) file.
+pub(super) fn mesh_err(path: &Path, message: String) -> Error {
     Error::Mesh {
         path: path.into(),
         message,
     }
 }
 
-fn vec3(v: [f64; 3], field: &str, path: &Path) -> Result<DVec3> {
-    if v.iter().all(|x| x.is_finite()) {
-        Ok(DVec3::from_array(v))
-    } else {
-        Err(scene_err(
+/// A position or vector: finite, components of magnitude at most [`MAX_COORDINATE`].
+fn vec3(v: Xyz, field: &str, path: &Path) -> Result<DVec3> {
+    let v = v.0;
+    if !v.iter().all(|x| x.is_finite()) {
+        return Err(scene_err(
             path,
             format!("`{field}` must be finite, got {v:?}"),
-        ))
+        ));
     }
+    if v.iter().any(|x| x.abs() > MAX_COORDINATE) {
+        return Err(scene_err(
+            path,
+            format!("`{field}` = {v:?} is beyond ±{MAX_COORDINATE:e} (the largest coordinate magnitude float32 tables handle)"),
+        ));
+    }
+    Ok(DVec3::from_array(v))
 }
 
-fn color(c: format::Rgb, field: &str, path: &Path) -> Result<DVec3> {
+/// An albedo-like colour: finite and non-negative.
+pub(super) fn color(c: format::Rgb, field: &str, path: &Path) -> Result<DVec3> {
     let v = c.channels();
     if v.iter().all(|x| x.is_finite() && *x >= 0.0) {
         Ok(DVec3::from_array(v))
@@ -105,89 +150,29 @@ fn color(c: format::Rgb, field: &str, path: &Path) -> Result<DVec3> {
     }
 }
 
-fn positive_int(v: Option<i64>, default: usize, field: &str, path: &Path) -> Result<usize> {
-    match v {
-        None => Ok(default),
-        Some(x) if x >= 1 => Ok(x as usize),
-        Some(x) => Err(scene_err(
+/// A radiance, intensity or irradiance: a colour of at most [`MAX_SOURCE`].
+pub(super) fn source(c: format::Rgb, field: &str, path: &Path) -> Result<DVec3> {
+    let v = color(c, field, path)?;
+    if v.max_element() > MAX_SOURCE {
+        return Err(scene_err(
             path,
-            format!("`{field}` must be at least 1, got {x}"),
-        )),
+            format!(
+                "`{field}` = {:?} exceeds {MAX_SOURCE:e}: {SOURCE_LIMIT_REASON}",
+                v.max_element()
+            ),
+        ));
     }
-}
-
-fn positive(v: Option<f64>, default: f64, field: &str, path: &Path) -> Result<f64> {
-    match v {
-        None => Ok(default),
-        Some(x) if x.is_finite() && x > 0.0 => Ok(x),
-        Some(x) => Err(scene_err(
-            path,
-            format!("`{field}` must be a positive finite number, got {x}"),
-        )),
-    }
-}
-
-fn solver_settings(s: &format::SolverDesc, path: &Path) -> Result<SolverSettings> {
-    let d = SolverSettings::default();
-    let bins = positive_int(s.bins, d.bins, "solver.bins", path)?;
-    crate::bins::Bins::new(bins).map_err(|e| scene_err(path, format!("`solver.bins`: {e}")))?;
-    let scheme = match s.scheme.as_deref() {
-        None | Some("symmetric") => Scheme::Symmetric,
-        Some("asymmetric") => Scheme::Asymmetric,
-        Some(x) => {
-            return Err(scene_err(
-                path,
-                format!("`solver.scheme` must be \"symmetric\" or \"asymmetric\", got {x:?}"),
-            ))
-        }
-    };
-    let precision = match s.precision.as_deref() {
-        None | Some("f16") => Precision::F16,
-        Some("f32") => Precision::F32,
-        Some(x) => {
-            return Err(scene_err(
-                path,
-                format!("`solver.precision` must be \"f16\" or \"f32\", got {x:?}"),
-            ))
-        }
-    };
-    Ok(SolverSettings {
-        bins,
-        iterations: positive_int(s.iterations, d.iterations, "solver.iterations", path)?,
-        scheme,
-        element_size: positive(s.element_size, d.element_size, "solver.element_size", path)?,
-        oracle: positive(s.oracle, d.oracle, "solver.oracle", path)?,
-        antiradiance_steps: positive_int(
-            s.antiradiance_steps,
-            d.antiradiance_steps,
-            "solver.antiradiance_steps",
-            path,
-        )?,
-        precision,
-        max_elements: positive_int(s.max_elements, d.max_elements, "solver.max_elements", path)?,
-        tolerance: match s.tolerance {
-            None => None,
-            Some(t) if t.is_finite() && t > 0.0 && t < 1.0 => Some(t),
-            Some(t) => {
-                return Err(scene_err(
-                    path,
-                    format!("`solver.tolerance` must be in (0, 1), got {t}"),
-                ))
-            }
-        },
-        max_iterations: positive_int(
-            s.max_iterations,
-            d.max_iterations,
-            "solver.max_iterations",
-            path,
-        )?,
-    })
+    Ok(v)
 }
 
 fn camera(c: &format::CameraDesc, path: &Path) -> Result<Camera> {
     let eye = vec3(c.eye, "camera.eye", path)?;
     let target = vec3(c.target, "camera.target", path)?;
-    let up = vec3(c.up.unwrap_or([0.0, 1.0, 0.0]), "camera.up", path)?;
+    let up = vec3(
+        c.up.unwrap_or(format::Exactly([0.0, 1.0, 0.0])),
+        "camera.up",
+        path,
+    )?;
     let fov = c.fov_y_deg.unwrap_or(40.0);
     if !(fov.is_finite() && fov > 0.0 && fov < 180.0) {
         return Err(scene_err(
@@ -196,7 +181,9 @@ fn camera(c: &format::CameraDesc, path: &Path) -> Result<Camera> {
         ));
     }
     let forward = target - eye;
-    if forward.length() < 1e-12 || forward.normalize().cross(up).length() < 1e-9 {
+    // Relative to the positions' magnitude: the same camera in any units.
+    let apart = forward.length() > 1e-12 * eye.abs().max(target.abs()).max_element();
+    if !apart || up == DVec3::ZERO || forward.normalize().cross(up.normalize()).length() < 1e-9 {
         return Err(scene_err(path, "`camera.up` must not be parallel to the view direction, and `camera.target` must differ from `camera.eye`".into()));
     }
     let dim = |v: Option<i64>, f: &str| -> Result<u32> {
@@ -219,42 +206,95 @@ fn camera(c: &format::CameraDesc, path: &Path) -> Result<Camera> {
     })
 }
 
-fn unit(v: [f64; 3], field: &str, path: &Path) -> Result<DVec3> {
+/// A direction: non-zero, normalized.
+fn unit(v: Xyz, field: &str, path: &Path) -> Result<DVec3> {
     let d = vec3(v, field, path)?;
-    if d.length() < 1e-12 {
+    if d == DVec3::ZERO {
         return Err(scene_err(path, format!("`{field}` must be non-zero")));
     }
     Ok(d.normalize())
 }
 
+/// The fields each light type takes (`type` aside).
+const LIGHT_FIELDS: [(&str, &[&str]); 3] = [
+    ("directional", &["direction", "irradiance"]),
+    ("point", &["position", "intensity"]),
+    (
+        "spot",
+        &[
+            "position",
+            "target",
+            "intensity",
+            "cutoff_deg",
+            "beam_width_deg",
+        ],
+    ),
+];
+
 fn light(l: &LightDesc, i: usize, path: &Path) -> Result<Light> {
     let f = |name: &str| format!("light[{i}].{name}");
-    Ok(match l {
-        LightDesc::Directional {
-            direction,
-            irradiance,
-        } => Light::Directional {
-            direction: unit(*direction, &f("direction"), path)?,
-            irradiance: color(*irradiance, &f("irradiance"), path)?,
+    let Some(&(kind, fields)) = LIGHT_FIELDS.iter().find(|(k, _)| *k == l.kind) else {
+        return Err(scene_err(
+            path,
+            format!(
+                "`{}` must be \"directional\", \"point\" or \"spot\", got {:?}",
+                f("type"),
+                l.kind
+            ),
+        ));
+    };
+    let given = [
+        ("direction", l.direction.is_some()),
+        ("irradiance", l.irradiance.is_some()),
+        ("position", l.position.is_some()),
+        ("intensity", l.intensity.is_some()),
+        ("target", l.target.is_some()),
+        ("cutoff_deg", l.cutoff_deg.is_some()),
+        ("beam_width_deg", l.beam_width_deg.is_some()),
+    ];
+    for (name, present) in given {
+        let wanted = fields.contains(&name);
+        if present != wanted {
+            return Err(scene_err(
+                path,
+                format!(
+                    "`{}` {}: a {kind} light takes {}",
+                    f(name),
+                    if present {
+                        "does not apply"
+                    } else {
+                        "is missing"
+                    },
+                    fields.join(", ")
+                ),
+            ));
+        }
+    }
+    // Every field the type takes is present (checked above).
+    let get = |v: Option<Xyz>| v.unwrap_or(format::Exactly([0.0; 3]));
+    let get_rgb = |v: Option<format::Rgb>| v.unwrap_or(format::Rgb::Grey(0.0));
+    Ok(match kind {
+        "directional" => Light::Directional {
+            direction: unit(get(l.direction), &f("direction"), path)?,
+            irradiance: source(get_rgb(l.irradiance), &f("irradiance"), path)?,
         },
-        LightDesc::Point {
-            position,
-            intensity,
-        } => Light::Point {
-            position: vec3(*position, &f("position"), path)?,
-            intensity: color(*intensity, &f("intensity"), path)?,
+        "point" => Light::Point {
+            position: vec3(get(l.position), &f("position"), path)?,
+            intensity: source(get_rgb(l.intensity), &f("intensity"), path)?,
         },
-        LightDesc::Spot {
-            position,
-            target,
-            intensity,
-            cutoff_deg,
-            beam_width_deg,
-        } => {
-            let p = vec3(*position, &f("position"), path)?;
-            let t = vec3(*target, &f("target"), path)?;
-            let axis = unit((t - p).to_array(), &f("target (minus position)"), path)?;
-            if !(cutoff_deg.is_finite() && *cutoff_deg > 0.0 && *cutoff_deg <= 180.0) {
+        _ => {
+            let p = vec3(get(l.position), &f("position"), path)?;
+            let t = vec3(get(l.target), &f("target"), path)?;
+            if !((t - p).length() > 1e-12 * p.abs().max(t.abs()).max_element()) {
+                return Err(scene_err(
+                    path,
+                    format!("`{}` must differ from `{}`", f("target"), f("position")),
+                ));
+            }
+            let axis = (t - p).normalize();
+            let cutoff_deg = l.cutoff_deg.unwrap_or(0.0);
+            let beam_width_deg = l.beam_width_deg.unwrap_or(0.0);
+            if !(cutoff_deg.is_finite() && cutoff_deg > 0.0 && cutoff_deg <= 180.0) {
                 return Err(scene_err(
                     path,
                     format!(
@@ -264,7 +304,7 @@ fn light(l: &LightDesc, i: usize, path: &Path) -> Result<Light> {
                 ));
             }
             if !(beam_width_deg.is_finite()
-                && *beam_width_deg >= 0.0
+                && beam_width_deg >= 0.0
                 && beam_width_deg <= cutoff_deg)
             {
                 return Err(scene_err(
@@ -278,7 +318,7 @@ fn light(l: &LightDesc, i: usize, path: &Path) -> Result<Light> {
             Light::Spot {
                 position: p,
                 axis,
-                intensity: color(*intensity, &f("intensity"), path)?,
+                intensity: source(get_rgb(l.intensity), &f("intensity"), path)?,
                 cutoff: cutoff_deg.to_radians(),
                 beam_width: beam_width_deg.to_radians(),
             }
@@ -286,23 +326,53 @@ fn light(l: &LightDesc, i: usize, path: &Path) -> Result<Light> {
     })
 }
 
-/// Object-to-world transform: `matrix`, or translate · rotate · scale.
-fn transform(o: &format::ObjectDesc, i: usize, path: &Path) -> Result<DMat4> {
+/// A finite number of magnitude at most [`MAX_COORDINATE`] (scale factors, matrix entries).
+fn bounded(x: f64, field: &str, path: &Path) -> Result<f64> {
+    if x.is_finite() && x.abs() <= MAX_COORDINATE {
+        Ok(x)
+    } else {
+        Err(scene_err(
+            path,
+            format!("`{field}` entry {x:?} must be finite and within ±{MAX_COORDINATE:e} (the largest coordinate magnitude float32 tables handle)"),
+        ))
+    }
+}
+
+/// Object-to-world transform (`matrix`, or translate · rotate · scale) and the fields that
+/// gave it, for messages.
+fn transform(o: &format::ObjectDesc, i: usize, path: &Path) -> Result<(DMat4, String)> {
     let f = |name: &str| format!("object[{i}].{name}");
-    let m = if let Some(rows) = o.matrix {
+    let (m, field) = if let Some(rows) = o.matrix {
         if o.scale.is_some() || o.rotate.is_some() || o.translate.is_some() {
             return Err(scene_err(
                 path,
                 format!("`{}` excludes scale, rotate and translate", f("matrix")),
             ));
         }
-        DMat4::from_cols_array_2d(&rows).transpose()
+        let rows = rows.0.map(|r| r.0);
+        for x in rows.iter().flatten() {
+            bounded(*x, &f("matrix"), path)?;
+        }
+        if rows[3] != [0.0, 0.0, 0.0, 1.0] {
+            return Err(scene_err(
+                path,
+                format!(
+                    "`{}`: the last row must be [0, 0, 0, 1] (an affine transform), got {:?}",
+                    f("matrix"),
+                    rows[3]
+                ),
+            ));
+        }
+        (DMat4::from_cols_array_2d(&rows).transpose(), f("matrix"))
     } else {
         let s = match o.scale {
             None => DVec3::ONE,
             Some(format::Scale::Uniform(k)) => DVec3::splat(k),
             Some(format::Scale::Axes(a)) => DVec3::from_array(a),
         };
+        for k in s.to_array() {
+            bounded(k, &f("scale"), path)?;
+        }
         let r = match o.rotate {
             None => glam::DQuat::IDENTITY,
             Some(r) => {
@@ -318,248 +388,34 @@ fn transform(o: &format::ObjectDesc, i: usize, path: &Path) -> Result<DMat4> {
                 )
             }
         };
-        let t = vec3(o.translate.unwrap_or([0.0; 3]), &f("translate"), path)?;
-        DMat4::from_scale_rotation_translation(s, r, t)
+        let t = vec3(
+            o.translate.unwrap_or(format::Exactly([0.0; 3])),
+            &f("translate"),
+            path,
+        )?;
+        let given: Vec<String> = [
+            ("scale", o.scale.is_some()),
+            ("rotate", o.rotate.is_some()),
+            ("translate", o.translate.is_some()),
+        ]
+        .iter()
+        .filter(|(_, g)| *g)
+        .map(|(n, _)| f(n))
+        .collect();
+        (
+            DMat4::from_scale_rotation_translation(s, r, t),
+            given.join("`, `"),
+        )
     };
-    let det = DMat3::from_mat4(m).determinant();
-    if !m.is_finite() || det.abs() < 1e-300 || !det.is_finite() {
+    // Invertible relative to the columns' lengths, so that any units pass alike.
+    let m3 = DMat3::from_mat4(m);
+    let det = m3.determinant();
+    let norms = m3.x_axis.length() * m3.y_axis.length() * m3.z_axis.length();
+    if !m.is_finite() || !det.is_finite() || !(det.abs() > 1e-12 * norms) {
         return Err(scene_err(
             path,
             format!("object[{i}]: transform must be finite and invertible"),
         ));
     }
-    Ok(m)
-}
-
-fn load_object(
-    scene: &mut Scene,
-    o: &format::ObjectDesc,
-    i: usize,
-    base: &Path,
-    scene_path: &Path,
-    warned: &mut BTreeSet<String>,
-) -> Result<()> {
-    let xf = transform(o, i, scene_path)?;
-    let obj_path: PathBuf = base.join(&o.mesh);
-    if !obj_path.is_file() {
-        return Err(scene_err(
-            scene_path,
-            format!("`object[{i}].mesh`: file {} not found", obj_path.display()),
-        ));
-    }
-    let opts = tobj::LoadOptions {
-        triangulate: true,
-        single_index: true,
-        ..Default::default()
-    };
-    let (models, mtl) = tobj::load_obj(&obj_path, &opts)
-        .map_err(|e| mesh_err(&obj_path, format!("cannot parse OBJ: {e}")))?;
-    let mtl = match mtl {
-        Ok(m) => m,
-        // No `mtllib`: tobj reports an empty list as an error on some paths; treat as no materials.
-        Err(tobj::LoadError::GenericFailure) | Err(tobj::LoadError::OpenFileFailed)
-            if !mentions_mtllib(&obj_path) =>
-        {
-            Vec::new()
-        }
-        Err(e) => {
-            return Err(mesh_err(
-                &obj_path,
-                format!("cannot load its MTL library: {e}"),
-            ))
-        }
-    };
-    for name in o.materials.keys() {
-        if !mtl.iter().any(|m| m.name.trim() == name) {
-            return Err(scene_err(
-                scene_path,
-                format!(
-                    "`object[{i}].materials.{name}`: no material of that name in {}",
-                    obj_path.display()
-                ),
-            ));
-        }
-    }
-    // Materials of this OBJ, appended to the scene's list with overrides applied.
-    let first = scene.materials.len() as u32;
-    for m in &mtl {
-        let name = m.name.trim().to_string();
-        let get = |v: Option<[f32; 3]>| {
-            v.map_or(DVec3::ZERO, |c| {
-                DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64)
-            })
-        };
-        let mut mat = Material {
-            name: name.clone(),
-            kd: get(m.diffuse),
-            ks: get(m.specular),
-            ns: m.shininess.unwrap_or(0.0) as f64,
-            ke: get(m.emissive),
-        };
-        if let Some(ke) = m.unknown_param.get("Ke").filter(|_| m.emissive.is_none()) {
-            let v: Vec<f64> = ke
-                .split_whitespace()
-                .filter_map(|x| x.parse().ok())
-                .collect();
-            if v.len() == 3 {
-                mat.ke = DVec3::new(v[0], v[1], v[2]);
-            }
-        }
-        if m.diffuse_texture.is_some() || m.specular_texture.is_some() || m.normal_texture.is_some()
-        {
-            warned.insert(format!(
-                "{}: material {name}: textures are not supported; using its Kd",
-                obj_path.display()
-            ));
-        }
-        if m.dissolve.is_some_and(|d| d < 1.0) || m.dissolve_texture.is_some() {
-            warned.insert(format!(
-                "{}: material {name}: transparency is not supported; treated as opaque",
-                obj_path.display()
-            ));
-        }
-        if let Some(ov) = o.materials.get(&name) {
-            let f = |k: &str| format!("object[{i}].materials.{name}.{k}");
-            if let Some(c) = ov.kd {
-                mat.kd = color(c, &f("kd"), scene_path)?;
-            }
-            if let Some(c) = ov.ks {
-                mat.ks = color(c, &f("ks"), scene_path)?;
-            }
-            if let Some(c) = ov.ke {
-                mat.ke = color(c, &f("ke"), scene_path)?;
-            }
-            if let Some(n) = ov.ns {
-                if !(n.is_finite() && n >= 0.0) {
-                    return Err(scene_err(
-                        scene_path,
-                        format!("`{}` must be finite and >= 0", f("ns")),
-                    ));
-                }
-                mat.ns = n;
-            }
-        }
-        for (v, what) in [(mat.kd, "Kd"), (mat.ks, "Ks"), (mat.ke, "Ke")] {
-            if !(v.is_finite() && v.min_element() >= 0.0) {
-                return Err(mesh_err(
-                    &obj_path,
-                    format!("material {name}: {what} must be finite and non-negative"),
-                ));
-            }
-        }
-        if !(mat.ns.is_finite() && mat.ns >= 0.0) {
-            return Err(mesh_err(
-                &obj_path,
-                format!("material {name}: Ns must be finite and non-negative"),
-            ));
-        }
-        if (mat.kd + mat.ks).max_element() > 1.0 {
-            warned.insert(format!(
-                "{}: material {name}: Kd + Ks exceeds 1 (not energy conserving)",
-                obj_path.display()
-            ));
-        }
-        scene.materials.push(mat);
-    }
-    let mut default_mat = None;
-    let mut seen: HashSet<[[u64; 3]; 3]> = HashSet::new();
-    let mut total = 0usize;
-    for model in &models {
-        let mesh = &model.mesh;
-        let mut positions = Vec::with_capacity(mesh.positions.len() / 3);
-        for (k, p) in mesh.positions.chunks_exact(3).enumerate() {
-            let v = DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64);
-            if !v.is_finite() {
-                return Err(mesh_err(
-                    &obj_path,
-                    format!(
-                        "model '{}': vertex {} is not finite: {v}",
-                        model.name,
-                        k + 1
-                    ),
-                ));
-            }
-            positions.push(xf.transform_point3(v));
-        }
-        let mat = match mesh.material_id {
-            Some(id) if id < mtl.len() => first + id as u32,
-            Some(id) => {
-                return Err(mesh_err(
-                    &obj_path,
-                    format!("model '{}': material index {id} out of range", model.name),
-                ))
-            }
-            None => *default_mat.get_or_insert_with(|| {
-                warned.insert(format!(
-                    "{}: faces without usemtl get a grey diffuse material (Kd 0.5)",
-                    obj_path.display()
-                ));
-                scene.materials.push(Material::diffuse("default", 0.5));
-                (scene.materials.len() - 1) as u32
-            }),
-        };
-        let mut triangles = Vec::with_capacity(mesh.indices.len() / 3);
-        for (t, idx) in mesh.indices.chunks_exact(3).enumerate() {
-            let tri = [idx[0], idx[1], idx[2]];
-            if tri.iter().any(|&v| v as usize >= positions.len()) {
-                return Err(mesh_err(
-                    &obj_path,
-                    format!(
-                        "model '{}': triangle {} has a vertex index out of range",
-                        model.name,
-                        t + 1
-                    ),
-                ));
-            }
-            let [a, b, c] = tri.map(|v| positions[v as usize]);
-            let longest = (b - a).length().max((c - b).length()).max((a - c).length());
-            let area2 = (b - a).cross(c - a).length();
-            if !(area2 > 1e-9 * longest * longest) {
-                return Err(mesh_err(
-                    &obj_path,
-                    format!(
-                        "model '{}': triangle {} is degenerate (zero area): {a}, {b}, {c}",
-                        model.name,
-                        t + 1
-                    ),
-                ));
-            }
-            let mut key = [a, b, c].map(|p| p.to_array().map(f64::to_bits));
-            key.sort();
-            if !seen.insert(key) {
-                return Err(mesh_err(
-                    &obj_path,
-                    format!(
-                        "model '{}': triangle {} duplicates an earlier face at {a}, {b}, {c}",
-                        model.name,
-                        t + 1
-                    ),
-                ));
-            }
-            triangles.push(tri);
-        }
-        total += triangles.len();
-        let n = triangles.len();
-        scene.meshes.push(Mesh {
-            name: if model.name.is_empty() {
-                format!("object{i}")
-            } else {
-                model.name.clone()
-            },
-            source: obj_path.clone(),
-            positions,
-            triangles,
-            material: vec![mat; n],
-        });
-    }
-    if total == 0 {
-        return Err(mesh_err(&obj_path, "mesh has no faces".into()));
-    }
-    Ok(())
-}
-
-fn mentions_mtllib(obj: &Path) -> bool {
-    std::fs::read_to_string(obj)
-        .map(|t| t.lines().any(|l| l.trim_start().starts_with("mtllib")))
-        .unwrap_or(false)
+    Ok((m, field))
 }

@@ -1,13 +1,22 @@
 //! Scenes: triangle meshes with Phong materials, analytic lights, environment, camera and solver
 //! settings. `format` is the TOML on disk, `load` turns it into a validated [`Scene`].
 
+mod files;
 pub mod format;
+pub mod limits;
 pub mod load;
+mod obj;
+mod object;
+mod settings;
 
 use glam::DVec3;
 use std::path::PathBuf;
 
 pub use crate::settings::{Precision, Scheme};
+pub use limits::{
+    max_elements_limit, MAX_ANTIRADIANCE_STEPS, MAX_COORDINATE, MAX_ITERATIONS, MAX_SOURCE,
+    RELATIVE_ELEMENT_SIZE,
+};
 pub use load::load_scene;
 
 /// A material: Lambertian `kd` plus a normalized modified-Phong lobe, and optional emission.
@@ -123,29 +132,39 @@ pub struct Camera {
     pub height: u32,
 }
 
-/// Solver settings (`[solver]`).
+/// Solver settings (`[solver]`). The ranges below are checked when a scene file is loaded.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SolverSettings {
-    /// Directional bins `m`.
+    /// Directional bins `m`: [`crate::bins::MIN_BINS`]..=[`crate::bins::MAX_BINS`], a count
+    /// [`crate::bins::Bins::new`] lays out as a grid.
     pub bins: usize,
-    /// Iterations (outer iterations for the asymmetric scheme).
+    /// Iterations (outer iterations for the asymmetric scheme): 1..=[`MAX_ITERATIONS`].
     pub iterations: usize,
     /// Iteration scheme.
     pub scheme: Scheme,
-    /// Longest edge of a leaf element.
+    /// Longest edge of a leaf element (scene units): finite, positive, at least
+    /// [`limits::MIN_RELATIVE_RESOLUTION`] × the largest coordinate magnitude, and small
+    /// enough elements must number at most `max_elements` (estimated from the triangles' areas
+    /// before anything is subdivided). A scene file that gives none gets
+    /// [`RELATIVE_ELEMENT_SIZE`] × the scene's bounding-box diagonal (resolved at load, after
+    /// the meshes are read); a value given in the file is absolute. [`Default`] (for scenes
+    /// built in code): 0.25.
     pub element_size: f64,
-    /// Oracle threshold τ: a link is refined while a node subtends more than τ·ω_bin.
+    /// Oracle threshold τ (finite, positive): a link is refined while a node subtends more than
+    /// τ·ω_bin.
     pub oracle: f64,
-    /// Antiradiance steps per radiance step (asymmetric scheme).
+    /// Antiradiance steps per radiance step (asymmetric scheme): 1..=[`MAX_ANTIRADIANCE_STEPS`].
     pub antiradiance_steps: usize,
     /// GPU table precision.
     pub precision: Precision,
-    /// Refuse scenes with more leaf elements than this.
+    /// Refuse scenes with more leaf elements than this: 1..=[`max_elements_limit`] (what this
+    /// machine's memory holds).
     pub max_elements: usize,
-    /// Residual target: iterate until the estimated error falls below it (then `iterations` is
-    /// ignored and `max_iterations` caps the count). `None`: exactly `iterations`.
+    /// Residual target in (0, 1): iterate until the estimated error falls below it (then
+    /// `iterations` is ignored and `max_iterations` caps the count). `None`: exactly
+    /// `iterations`.
     pub tolerance: Option<f64>,
-    /// Iteration cap when `tolerance` is given.
+    /// Iteration cap when `tolerance` is given: 1..=[`MAX_ITERATIONS`].
     pub max_iterations: usize,
 }
 

@@ -1,0 +1,179 @@
+//! Scenes people have must load and render (issue 18): `tests/accept/` holds the downloaded
+//! Cornell box (with its repeated faces), the same box at 10⁴ and 10⁻³ scale, CRLF files,
+//! relative OBJ indices, many-vertex faces, a one-triangle scene and what other renderers
+//! accept with a warning. Each renders through the command-line tool with the CPU backend.
+
+use antiradiance::elements::build_elements;
+use antiradiance::frame::Image;
+use antiradiance::scene::{load::parse_scene, load_scene, Scene, RELATIVE_ELEMENT_SIZE};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+fn dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/accept")
+}
+
+fn load(name: &str) -> Scene {
+    let p = dir().join(name);
+    load_scene(&p).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+fn diagonal(s: &Scene) -> f64 {
+    let (lo, hi) = s.bounds();
+    (hi - lo).length()
+}
+
+/// Every scene renders through `antiradiance render --backend cpu` at 16×16, quickly, to an
+/// EXR whose pixels are finite and not all black.
+#[test]
+fn every_scene_renders_a_finite_lit_image() {
+    let mut scenes: Vec<PathBuf> = std::fs::read_dir(dir())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    scenes.sort();
+    assert!(scenes.len() >= 8, "only {} scenes", scenes.len());
+    for scene in &scenes {
+        let name = scene.file_name().unwrap().to_string_lossy().into_owned();
+        let exr = std::env::temp_dir().join(format!("accept-{}-{name}.exr", std::process::id()));
+        let t = Instant::now();
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_antiradiance"))
+            .arg("render")
+            .arg(scene)
+            .args(["--backend", "cpu", "--width", "16", "--height", "16"])
+            .args(["--bins", "32", "--iterations", "1", "--exr"])
+            .arg(&exr)
+            .output()
+            .unwrap();
+        let seconds = t.elapsed().as_secs_f64();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{name}: {stderr}");
+        assert!(seconds < 5.0, "{name}: took {seconds:.1} s");
+        let img = Image::read_exr(&exr).unwrap();
+        assert_eq!((img.width, img.height), (16, 16), "{name}");
+        img.check_finite(&exr).unwrap();
+        let brightest = img.pixels.iter().flatten().fold(0f32, |a, &b| a.max(b));
+        assert!(brightest > 0.0, "{name}: black image");
+        std::fs::remove_file(&exr).unwrap();
+    }
+}
+
+#[test]
+fn the_downloaded_cornell_box_drops_its_repeated_faces_with_one_warning() {
+    let s = load("cornell-box-original.toml");
+    assert_eq!(s.triangle_count(), 32, "36 triangles less 2 repeated quads");
+    let w: Vec<&String> = s
+        .warnings
+        .iter()
+        .filter(|w| w.contains("duplicate"))
+        .collect();
+    assert_eq!(w.len(), 1, "{:?}", s.warnings);
+    assert!(
+        w[0].contains("CornellBox-Original.obj") && w[0].contains("4 duplicate triangles"),
+        "{}",
+        w[0]
+    );
+    // No element_size in the file: the relative default, 0.25 on this box.
+    assert!(
+        (s.solver.element_size - 0.25).abs() < 0.01,
+        "{}",
+        s.solver.element_size
+    );
+    assert_eq!(s.solver.element_size, RELATIVE_ELEMENT_SIZE * diagonal(&s));
+}
+
+/// The same closed box without `element_size`, at 10⁻³, 1 and 10⁴: the same elements.
+#[test]
+fn the_default_element_size_follows_the_scene_size() {
+    let mut counts = Vec::new();
+    for k in [1e-3, 1.0, 1e4] {
+        let text = format!("[[object]]\nmesh = \"box.obj\"\nscale = {k:e}\n");
+        let s = parse_scene(&text, &dir().join(format!("box-{k}.toml"))).unwrap();
+        let relative = s.solver.element_size / diagonal(&s);
+        assert!(
+            (relative - RELATIVE_ELEMENT_SIZE).abs() < 1e-12,
+            "scale {k}: {relative}"
+        );
+        counts.push(build_elements(&s, &s.solver).unwrap().len());
+    }
+    assert!(counts[0] > 100, "{counts:?}");
+    assert!(counts.iter().all(|&n| n == counts[0]), "{counts:?}");
+    // A size written in the file stays absolute (and at 10⁴ scale is far too small).
+    let text = |k: f64| {
+        format!("[solver]\nelement_size = 0.5\n[[object]]\nmesh = \"box.obj\"\nscale = {k:e}\n")
+    };
+    let s = parse_scene(&text(4.0), &dir().join("box.toml")).unwrap();
+    assert_eq!(s.solver.element_size, 0.5);
+    let e = parse_scene(&text(1e4), &dir().join("box.toml"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("would create at least") && e.contains("max_elements"),
+        "{e}"
+    );
+}
+
+#[test]
+fn scaled_boxes_match_the_original_triangle_for_triangle() {
+    let one = load("cornell-box-original.toml");
+    for (name, k) in [
+        ("cornell-box-1e4.toml", 1e4),
+        ("cornell-box-1e-3.toml", 1e-3),
+    ] {
+        let s = load(name);
+        assert_eq!(s.triangle_count(), one.triangle_count(), "{name}");
+        assert!(
+            (s.solver.element_size / (k * one.solver.element_size) - 1.0).abs() < 1e-12,
+            "{name}: {}",
+            s.solver.element_size
+        );
+    }
+}
+
+#[test]
+fn crlf_relative_indices_and_polygons_read_as_their_plain_forms() {
+    // crlf.obj and relative-indices.obj are box.obj rewritten.
+    let plain = parse_scene("[[object]]\nmesh = \"box.obj\"\n", &dir().join("b.toml")).unwrap();
+    for name in ["crlf.toml", "relative-indices.toml"] {
+        let s = load(name);
+        assert!(s.warnings.is_empty(), "{name}: {:?}", s.warnings);
+        assert_eq!(s.triangle_count(), plain.triangle_count(), "{name}");
+        let tris = |s: &Scene| -> Vec<[[f64; 3]; 3]> {
+            s.meshes
+                .iter()
+                .flat_map(|m| {
+                    m.triangles
+                        .iter()
+                        .map(|t| t.map(|v| m.positions[v as usize].to_array()))
+                })
+                .collect()
+        };
+        assert_eq!(tris(&s), tris(&plain), "{name}");
+        let lights = s.materials.iter().filter(|m| m.is_emitter()).count();
+        assert_eq!(lights, 1, "{name}");
+    }
+    // Two 6-vertex caps, six quad sides and a 6-vertex light: 4 + 4 + 12 + 4 triangles.
+    assert_eq!(load("polygons.toml").triangle_count(), 24);
+    assert_eq!(load("one-triangle.toml").triangle_count(), 1);
+}
+
+#[test]
+fn lenient_input_is_accepted_with_a_warning_each() {
+    let s = load("lenient.toml");
+    // Floor, its reversed twin, and the quad with an unknown material; the repeat is dropped.
+    assert_eq!(s.triangle_count(), 6);
+    let warned = |needle: &str| {
+        assert!(
+            s.warnings.iter().any(|w| w.contains(needle)),
+            "no warning with `{needle}`: {:?}",
+            s.warnings
+        )
+    };
+    warned("line 15: usemtl nosuch: no material of that name");
+    warned("default grey diffuse material");
+    warned("1 polyline (`l` element) ignored (first at line 17)");
+    warned("2 duplicate triangles dropped");
+    let grey = s.materials.iter().find(|m| m.name == "grey").unwrap();
+    assert_eq!(grey.kd.to_array(), [0.5; 3], "one-value Kd is grey");
+}
