@@ -3,6 +3,7 @@
 mod cli;
 
 use antiradiance::engine::{Engine, Options};
+use antiradiance::frame::image::{check_output_path, write_atomic};
 use antiradiance::frame::Image;
 use antiradiance::{info::Info, scene, Scene};
 use anyhow::{Context, Result};
@@ -38,8 +39,16 @@ fn load(path: Option<PathBuf>) -> Result<Scene> {
 
 fn write_json(path: &Option<PathBuf>, value: &impl serde::Serialize) -> Result<()> {
     if let Some(p) = path {
-        std::fs::write(p, serde_json::to_string_pretty(value)?)
-            .with_context(|| format!("writing {}", p.display()))?;
+        let text = serde_json::to_string_pretty(value)?;
+        write_atomic(p, |w| std::io::Write::write_all(w, text.as_bytes()))?;
+    }
+    Ok(())
+}
+
+/// Refuses, before any work, an output that could not be written (nothing is left half-done).
+fn check_outputs<'a>(paths: impl IntoIterator<Item = Option<&'a PathBuf>>) -> Result<()> {
+    for p in paths.into_iter().flatten() {
+        check_output_path(p)?;
     }
     Ok(())
 }
@@ -50,7 +59,18 @@ fn wrote(p: &Path) {
 
 /// Errors are one line (`Error: ...`, causes joined with `: `), whatever RUST_BACKTRACE says.
 fn main() -> std::process::ExitCode {
-    match run(Cli::parse()) {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) if !e.use_stderr() => e.exit(), // --help, --version
+        Err(e) => {
+            // clap's first line names the flag and the value; usage hints are dropped.
+            let text = e.to_string();
+            let line = text.lines().next().unwrap_or("invalid arguments");
+            eprintln!("Error: {}", line.trim_start_matches("error: "));
+            return std::process::ExitCode::from(2);
+        }
+    };
+    match run(cli) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("Error: {}", format!("{e:#}").replace('\n', " "));
@@ -66,7 +86,10 @@ fn run(cli: Cli) -> Result<()> {
             reference,
             diff,
         } => {
+            check_outputs([diff.as_ref()])?;
             let (t, r) = (Image::read_exr(&test)?, Image::read_exr(&reference)?);
+            t.check_finite(&test)?;
+            r.check_finite(&reference)?;
             let m = antiradiance::metrics::compare(&t, &r)?;
             println!("{}", serde_json::to_string_pretty(&m)?);
             if let Some(p) = diff {
@@ -88,12 +111,14 @@ fn run(cli: Cli) -> Result<()> {
             device,
         } => {
             let s = load(scene)?;
+            std::fs::create_dir_all(&out).with_context(|| format!("{}", out.display()))?;
+            check_outputs([Some(&out.join("study.csv"))])?;
             let truth = antiradiance::study::Truth::load(&reference)?;
-            if truth.direct.is_none() {
-                eprintln!("note: no REF.direct.exr beside the reference; no indirect-only error");
+            if let Some(why) = truth.no_indirect_reason() {
+                eprintln!("note: {why}; the indirect-only columns stay empty");
             }
             let mut o = antiradiance::study::StudyOptions::defaults(&s, out.clone());
-            o.iterations = iterations;
+            o.iterations = iterations as usize;
             o.bins = bins.unwrap_or(o.bins);
             o.element_sizes = element_sizes.unwrap_or(o.element_sizes);
             o.spp = spp.unwrap_or(o.spp);
@@ -122,6 +147,8 @@ fn run(cli: Cli) -> Result<()> {
             exposure,
             json,
         } => {
+            let (direct, stderr) = antiradiance::reference::sibling_paths(&exr);
+            check_outputs([Some(&exr), Some(&direct), Some(&stderr), output.as_ref(), json.as_ref()])?;
             let mut s = load(scene)?;
             // The path tracer renders the scene's camera at the requested size.
             let camera = Options {
@@ -158,6 +185,7 @@ fn run(cli: Cli) -> Result<()> {
             device,
             plan,
         } => {
+            check_outputs([json.as_ref()])?;
             let s = load(scene)?;
             let mut o = plan.options();
             o.solver.bins = bins;
@@ -166,7 +194,7 @@ fn run(cli: Cli) -> Result<()> {
             if let Some(c) = o.resolve(&s)?.target {
                 eprintln!("{}", c.summary());
             }
-            let report = antiradiance::profile::profile(&s, &o, frames, warmup)
+            let report = antiradiance::profile::profile(&s, &o, frames as usize, warmup as usize)
                 .with_context(|| scene_name(&s))?;
             print!("{}", report.text());
             write_json(&json, &report)?;
@@ -200,6 +228,9 @@ fn run(cli: Cli) -> Result<()> {
             device,
             plan,
         } => {
+            let png = (output.is_some() || exr.is_none())
+                .then(|| output.clone().unwrap_or_else(|| PathBuf::from("out.png")));
+            check_outputs([png.as_ref(), exr.as_ref(), json.as_ref()])?;
             let s = load(scene)?;
             let mut o = plan.options();
             o.solver = solver.overrides();
@@ -219,8 +250,7 @@ fn run(cli: Cli) -> Result<()> {
                 r.image.write_exr(p)?;
                 wrote(p);
             }
-            if output.is_some() || exr.is_none() {
-                let p = output.unwrap_or_else(|| PathBuf::from("out.png"));
+            if let Some(p) = png {
                 r.image.write_png(&p, exposure)?;
                 wrote(&p);
             }
@@ -247,6 +277,9 @@ fn report(st: &antiradiance::engine::RenderStats) {
     }
     for w in &st.warnings {
         eprintln!("warning: {w}");
+    }
+    if st.iterations == 0 {
+        eprintln!("note: 0 iterations: the image shows emission and direct light only, no interreflection");
     }
     if let Some(e) = st.estimated_error {
         eprintln!(

@@ -6,6 +6,23 @@ use antiradiance::{BackendKind, Precision, Scheme};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
 
+/// A finite float (clap value parser): `nan` and `inf` are refused naming the flag.
+fn finite(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        Ok(v) => Err(format!("must be a finite number, got {v}")),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
+/// A positive finite float (element sizes, tolerances, error targets).
+fn positive(s: &str) -> Result<f64, String> {
+    match finite(s)? {
+        v if v > 0.0 => Ok(v),
+        v => Err(format!("must be positive, got {v}")),
+    }
+}
+
 /// `antiradiance`: global illumination with implicit visibility and antiradiance.
 #[derive(Parser)]
 #[command(
@@ -48,7 +65,7 @@ pub enum Command {
         #[command(flatten)]
         solver: SolverArgs,
         /// Iterate until the estimated error is below this instead of a fixed count.
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true, value_parser = positive)]
         tolerance: Option<f64>,
         /// Iteration cap with --tolerance (default: `solver.max_iterations`, 1000).
         #[arg(long)]
@@ -56,7 +73,7 @@ pub enum Command {
         #[command(flatten)]
         size: SizeArgs,
         /// PNG exposure in stops (pixel values are multiplied by 2^exposure).
-        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite)]
         exposure: f64,
         /// Which implementation solves and draws.
         #[arg(long, value_enum, default_value_t = BackendKind::Gpu)]
@@ -93,7 +110,7 @@ pub enum Command {
         #[arg(short, long)]
         output: Option<PathBuf>,
         /// PNG exposure in stops.
-        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite)]
         exposure: f64,
         /// Write the convergence figures as JSON to this file.
         #[arg(long)]
@@ -113,13 +130,13 @@ pub enum Command {
         #[arg(long)]
         out: PathBuf,
         /// Antiradiance is measured after every iteration 1..=N.
-        #[arg(long, default_value_t = 16)]
-        iterations: usize,
+        #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+        iterations: u32,
         /// Bin counts to try, comma-separated (default 32,64,128,256,512).
         #[arg(long, value_delimiter = ',')]
         bins: Option<Vec<usize>>,
         /// Element sizes to try, comma-separated (default: the scene's ×2, ×1, ×0.5).
-        #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+        #[arg(long, value_delimiter = ',', allow_negative_numbers = true, value_parser = positive)]
         element_sizes: Option<Vec<f64>>,
         /// Path tracer sample counts, comma-separated (default 1,4,16,64,256).
         #[arg(long, value_delimiter = ',')]
@@ -151,12 +168,12 @@ pub enum Command {
     Profile {
         /// Scene TOML (default: the bundled Cornell box).
         scene: Option<PathBuf>,
-        /// Frames to time after warm-up.
-        #[arg(long, default_value_t = 10)]
-        frames: usize,
+        /// Frames to time after warm-up (at least 1).
+        #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+        frames: u32,
         /// Untimed warm-up frames.
-        #[arg(long, default_value_t = 2)]
-        warmup: usize,
+        #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(0..=100_000))]
+        warmup: u32,
         /// Override `solver.bins`.
         #[arg(long)]
         bins: Option<usize>,
@@ -223,7 +240,7 @@ pub struct PlanArgs {
     pub all_passes: bool,
     /// Choose bins, element size and iterations for this relative RMSE from measured
     /// error-vs-time data (replaces the scene's and --bins/--iterations).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true, value_parser = positive)]
     pub target_error: Option<f64>,
 }
 

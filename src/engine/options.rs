@@ -142,8 +142,32 @@ impl Options {
                 return bad(format!("--tolerance must be in (0, 1), got {t}"));
             }
         }
-        if self.solver.max_iterations == Some(0) {
-            return bad("--max-iterations must be at least 1".into());
+        use crate::scene::{MAX_ANTIRADIANCE_STEPS, MAX_ITERATIONS};
+        if let Some(n) = self.solver.iterations.filter(|&n| n > MAX_ITERATIONS) {
+            return bad(format!(
+                "--iterations must be 0..={MAX_ITERATIONS} (a cap against typos, not a convergence limit), got {n}"
+            ));
+        }
+        if let Some(n) = self
+            .solver
+            .max_iterations
+            .filter(|n| !(1..=MAX_ITERATIONS).contains(n))
+        {
+            return bad(format!(
+                "--max-iterations must be 1..={MAX_ITERATIONS}, got {n}"
+            ));
+        }
+        if let Some(n) = self
+            .solver
+            .antiradiance_steps
+            .filter(|n| !(1..=MAX_ANTIRADIANCE_STEPS).contains(n))
+        {
+            return bad(format!(
+                "antiradiance steps must be 1..={MAX_ANTIRADIANCE_STEPS}, got {n}"
+            ));
+        }
+        if let Some(o) = self.solver.oracle.filter(|o| !(*o > 0.0 && o.is_finite())) {
+            return bad(format!("the oracle τ must be positive and finite, got {o}"));
         }
         for (flag, v) in [("--width", self.width), ("--height", self.height)] {
             if let Some(v) = v {

@@ -227,8 +227,22 @@ impl Context {
         } else {
             None
         };
-        let (physical_device, queue_family) = pick_device(&instance, opts.device_name.clone())
-            .inspect_err(|_| unsafe { instance.destroy_instance(None) })?;
+        // On failure before the device exists, the messenger goes before the instance (else the
+        // layer reports the instance destroyed with a messenger still alive).
+        let abandon = |messenger: &Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>| unsafe {
+            if let Some((du, m)) = messenger {
+                du.destroy_debug_utils_messenger(*m, None);
+            }
+            instance.destroy_instance(None);
+        };
+        let (physical_device, queue_family) =
+            match pick_device(&instance, opts.device_name.clone()) {
+                Ok(p) => p,
+                Err(e) => {
+                    abandon(&messenger);
+                    return Err(e);
+                }
+            };
         let dev_exts = unsafe { instance.enumerate_device_extension_properties(physical_device) }
             .vk("listing device extensions")?;
         let has_lines = dev_exts
@@ -251,7 +265,7 @@ impl Context {
             has_lines && line_feat.bresenham_lines == vk::TRUE,
         );
         if !dyn_ok || !sync_ok || !blend_ok {
-            unsafe { instance.destroy_instance(None) };
+            abandon(&messenger);
             return Err(Error::Device(
                 "the device lacks dynamicRendering, synchronization2 (Vulkan 1.3) or independentBlend".into(),
             ));

@@ -143,13 +143,38 @@ pub struct Truth {
     pub direct: Option<Image>,
 }
 
+/// Indirect light below this fraction of the full image's mean counts as none: relative errors
+/// of an image of (almost) zeros are not finite, so those columns stay empty.
+const NO_INDIRECT: f64 = 1e-9;
+
 impl Truth {
-    /// Reads a reference EXR and, when present, its `REF.direct.exr` beside it.
+    /// Why the indirect-only errors are not measured, or `None` when they are.
+    pub fn no_indirect_reason(&self) -> Option<String> {
+        let Some(d) = &self.direct else {
+            return Some("no REF.direct.exr beside the reference".into());
+        };
+        let mean = |img: &Image| {
+            img.pixels.iter().flatten().map(|v| v.abs() as f64).sum::<f64>()
+                / (3 * img.pixels.len()).max(1) as f64
+        };
+        let full = mean(&self.image);
+        let indirect = subtract(&self.image, d).map(|i| mean(&i)).unwrap_or(0.0);
+        (!(indirect > NO_INDIRECT * full)).then(|| {
+            format!(
+                "the reference has no indirect light (mean {indirect:.3e} against {full:.3e} in all)"
+            )
+        })
+    }
+
+    /// Reads a reference EXR and, when present, its `REF.direct.exr` beside it. Images with a
+    /// non-finite pixel are refused (naming the file): no metric of them would be finite.
     pub fn load(path: &std::path::Path) -> Result<Self> {
         let image = Image::read_exr(path)?;
+        image.check_finite(path)?;
         let (direct_path, _) = crate::reference::sibling_paths(path);
         let direct = if direct_path.is_file() {
             let d = Image::read_exr(&direct_path)?;
+            d.check_finite(&direct_path)?;
             if (d.width, d.height) != (image.width, image.height) {
                 return Err(Error::Output {
                     path: direct_path,
@@ -217,8 +242,10 @@ fn configs(scene: &Scene, o: &StudyOptions) -> Result<Vec<Config>> {
 fn measure(image: &Image, truth: &Truth) -> Result<(Metrics, Option<Metrics>)> {
     let full = compare(image, &truth.image)?;
     let indirect = match &truth.direct {
-        Some(d) => Some(compare(&subtract(image, d)?, &subtract(&truth.image, d)?)?),
-        None => None,
+        Some(d) if truth.no_indirect_reason().is_none() => {
+            Some(compare(&subtract(image, d)?, &subtract(&truth.image, d)?)?)
+        }
+        _ => None,
     };
     Ok((full, indirect))
 }
@@ -378,12 +405,27 @@ pub fn write(rows: &[Row], dir: &std::path::Path) -> Result<plot::Crossover> {
         path: dir.to_path_buf(),
         message: e.to_string(),
     })?;
-    let p = dir.join("study.csv");
-    std::fs::write(&p, csv(rows)).map_err(|e| Error::Output {
-        path: p.clone(),
-        message: e.to_string(),
+    let text = csv(rows);
+    crate::frame::image::write_atomic(&dir.join("study.csv"), |w| {
+        std::io::Write::write_all(w, text.as_bytes())
     })?;
-    let cross = plot::error_vs_time(rows, &dir.join("error-vs-time.png"))?;
-    plot::convergence(rows, &dir.join("convergence.png"))?;
+    // Plots go to a temporary file renamed when complete, like every other output.
+    fn whole<T>(dir: &std::path::Path, name: &str, draw: impl FnOnce(&std::path::Path) -> Result<T>) -> Result<T> {
+        let (tmp, path) = (dir.join(format!(".{name}.partial.png")), dir.join(name));
+        let out = draw(&tmp).and_then(|v| {
+            std::fs::rename(&tmp, &path)
+                .map(|_| v)
+                .map_err(|e| Error::Output {
+                    path: path.clone(),
+                    message: e.to_string(),
+                })
+        });
+        if out.is_err() {
+            let _ = std::fs::remove_file(&tmp);
+        }
+        out
+    }
+    let cross = whole(dir, "error-vs-time.png", |p| plot::error_vs_time(rows, p))?;
+    whole(dir, "convergence.png", |p| plot::convergence(rows, p))?;
     Ok(cross)
 }

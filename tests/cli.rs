@@ -1,0 +1,178 @@
+//! The command line's edge cases (issue 18): flags are checked before any work, errors are one
+//! line with an exact exit status, and a failed run leaves no output behind. GPU runs have the
+//! validation layer on (`ANTIRADIANCE_VALIDATION=1`), so a validation message is visible here.
+
+use antiradiance::frame::Image;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn bin() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_antiradiance"));
+    c.env("ANTIRADIANCE_VALIDATION", "1");
+    c
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("antiradiance-cli-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn scene() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/accept/one-triangle.toml")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Runs and expects exit status `code` with one `Error:` line mentioning every needle, and no
+/// validation message.
+fn refused(args: &[&str], code: i32, needles: &[&str]) {
+    let o = bin().args(args).output().unwrap();
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(code), "{args:?}: {e}");
+    let errors: Vec<&str> = e.lines().filter(|l| l.starts_with("Error:")).collect();
+    assert_eq!(errors.len(), 1, "{args:?}: {e}");
+    for n in needles {
+        assert!(errors[0].contains(n), "{args:?}: `{}` lacks `{n}`", errors[0]);
+    }
+    assert!(!e.contains("validation"), "{args:?}: {e}");
+}
+
+#[test]
+fn non_finite_and_out_of_range_flags_are_refused_naming_the_flag() {
+    let s = scene();
+    let s = s.to_str().unwrap();
+    refused(&["render", s, "--exposure", "nan"], 2, &["--exposure"]);
+    refused(&["render", s, "--exposure", "inf"], 2, &["--exposure"]);
+    refused(&["render", s, "--tolerance", "nan"], 2, &["--tolerance"]);
+    refused(&["render", s, "--target-error", "-1"], 2, &["--target-error"]);
+    refused(&["profile", s, "--frames", "0"], 2, &["--frames"]);
+    refused(&["render", s, "--iterations", "1000000"], 1, &["--iterations"]);
+    refused(&["render", s, "--max-iterations", "0"], 1, &["--max-iterations"]);
+    refused(&["render", s, "--width", "0"], 1, &["--width"]);
+    refused(&["render", s, "--bins", "7"], 1, &["--bins"]);
+    // A negative number after a list flag is its value, refused by name.
+    refused(
+        &["study", s, "--reference", "r.exr", "--out", "o", "--element-sizes", "-0.5"],
+        2,
+        &["--element-sizes", "-0.5"],
+    );
+    refused(&["render", s, "--device", "no such device"], 1, &["no such device"]);
+}
+
+#[test]
+fn zero_iterations_render_direct_light_only_and_say_so() {
+    let d = scratch("zero");
+    let exr = d.join("z.exr");
+    let o = bin()
+        .args(["render", scene().to_str().unwrap(), "--backend", "cpu", "--width", "8"])
+        .args(["--height", "8", "--iterations", "0", "--exr", exr.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(stderr(&o).contains("0 iterations"), "{}", stderr(&o));
+    assert!(Image::read_exr(&exr).unwrap().is_finite());
+}
+
+#[test]
+fn a_bad_output_path_is_refused_before_rendering_and_leaves_nothing() {
+    let d = scratch("outputs");
+    let png = d.join("out.png");
+    let s = scene();
+    let args = |json: &str| {
+        let mut a = vec!["render", s.to_str().unwrap(), "--backend", "cpu"];
+        a.extend(["--width", "8", "--height", "8", "--iterations", "1"]);
+        a.extend(["-o", png.to_str().unwrap(), "--json"]);
+        a.push(json);
+        a.into_iter().map(String::from).collect::<Vec<_>>()
+    };
+    let bad = d.join("missing/stats.json");
+    let o = bin().args(args(bad.to_str().unwrap())).output().unwrap();
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("missing"), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("elements"), "rendered before refusing");
+    assert!(!png.exists(), "a PNG was left behind");
+    // A directory as an output is refused by name too.
+    let o = bin().args(args(d.to_str().unwrap())).output().unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("directory"), "{}", stderr(&o));
+    assert!(!png.exists());
+    // Nothing but the outputs in the folder: no temporary files left either.
+    let good = d.join("stats.json");
+    let o = bin().args(args(good.to_str().unwrap())).output().unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let mut names: Vec<String> = std::fs::read_dir(&d)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["out.png", "stats.json"]);
+}
+
+#[test]
+fn compare_refuses_a_non_finite_image_naming_it() {
+    let d = scratch("compare");
+    let good = Image {
+        width: 2,
+        height: 2,
+        pixels: vec![[1.0; 3]; 4],
+    };
+    let mut bad = good.clone();
+    bad.pixels[3] = [f32::NAN, 1.0, 1.0];
+    let (g, b) = (d.join("good.exr"), d.join("bad.exr"));
+    good.write_exr(&g).unwrap();
+    // The writers refuse non-finite images, so write the bad one's bytes through exr directly.
+    exr::prelude::write_rgb_file(&b, 2, 2, |x, y| {
+        let p = bad.pixels[y * 2 + x];
+        (p[0], p[1], p[2])
+    })
+    .unwrap();
+    refused(
+        &["compare", b.to_str().unwrap(), g.to_str().unwrap()],
+        1,
+        &["bad.exr", "not finite"],
+    );
+    let o = bin()
+        .args(["compare", g.to_str().unwrap(), g.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("\"rel_rmse\": 0.0"));
+}
+
+#[test]
+fn study_without_indirect_light_leaves_those_columns_empty_and_says_why() {
+    let d = scratch("study");
+    // A lone triangle under a directional light: the reference has no indirect light at all.
+    let reference = d.join("ref.exr");
+    let o = bin()
+        .args(["reference", scene().to_str().unwrap(), "--spp", "4", "--width", "8"])
+        .args(["--height", "8", "--exr", reference.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let out = d.join("study");
+    let o = bin()
+        .args(["study", scene().to_str().unwrap(), "--reference"])
+        .arg(&reference)
+        .args(["--out", out.to_str().unwrap(), "--backend", "cpu", "--iterations", "1"])
+        .args(["--bins", "32", "--element-sizes", "0.5", "--spp", "1", "--one-scheme"])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("no indirect light"),
+        "{}",
+        stderr(&o)
+    );
+    let csv = std::fs::read_to_string(out.join("study.csv")).unwrap();
+    assert!(!csv.contains("inf") && !csv.contains("NaN"), "{csv}");
+    for line in csv.lines().skip(1) {
+        let cols: Vec<&str> = line.split(',').collect();
+        assert!(cols[18..21].iter().all(|c| c.is_empty()), "{line}");
+        assert!(cols[15].parse::<f64>().unwrap().is_finite(), "{line}");
+    }
+}
