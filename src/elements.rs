@@ -42,10 +42,15 @@ impl Element {
 }
 
 fn longest_edge(t: &[DVec3; 3]) -> (usize, f64) {
-    (0..3)
-        .map(|i| (i, (t[(i + 1) % 3] - t[i]).length()))
-        .max_by(|a, b| a.1.total_cmp(&b.1))
-        .unwrap()
+    let len = |i: usize| (t[(i + 1) % 3] - t[i]).length();
+    let longest = len(0).max(len(1)).max(len(2));
+    // Edges equal but for rounding (legs of right isosceles triangles) are a tie, broken by
+    // position (the last), so that the same mesh in other units splits the same way.
+    let i = (0..3)
+        .rev()
+        .find(|&i| len(i) >= longest * (1.0 - 1e-9))
+        .unwrap_or(0);
+    (i, longest)
 }
 
 /// Bisections below one input triangle never go deeper than this. float64 tells midpoints

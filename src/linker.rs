@@ -69,6 +69,10 @@ pub fn in_front(receiver: &Element, sender: DVec3) -> bool {
     receiver.normal.dot(d) > 1e-7 * d.length()
 }
 
+/// Relative width of a tie in the refinement tests: far above f64 rounding, far below any real
+/// difference between two configurations.
+const TIE: f64 = 1e-9;
+
 struct Ctx<'a> {
     h: &'a Hierarchy,
     els: &'a [Element],
@@ -100,7 +104,10 @@ impl Ctx<'_> {
         if let Some(re) = self.leaf(r) {
             let behind = match self.leaf(s) {
                 Some(_) => !in_front(re, ns.center),
-                None => re.normal.dot(ns.center - re.center) + ns.radius <= 0.0,
+                None => {
+                    let h = re.normal.dot(ns.center - re.center);
+                    h + ns.radius <= TIE * (h.abs() + ns.radius)
+                }
             };
             if behind {
                 return Step::Done(None);
@@ -108,11 +115,14 @@ impl Ctx<'_> {
         }
         let d = (nr.center - ns.center).length();
         let big = nr.radius.max(ns.radius);
-        let coarse = d <= nr.radius + ns.radius || PI * big * big > self.limit * d * d;
+        // Regular meshes put many pairs exactly on these thresholds; a tie within TIE decides
+        // the same way in any unit (rounding would otherwise flip it with the scene's scale).
+        let coarse = d <= (nr.radius + ns.radius) * (1.0 + TIE)
+            || PI * big * big > self.limit * d * d * (1.0 + TIE);
         let (rc, sc) = (self.h.children(r), self.h.children(s));
         if coarse && (rc.is_some() || sc.is_some()) {
             let split_receiver = match (rc, sc) {
-                (Some(_), Some(_)) => nr.radius >= ns.radius,
+                (Some(_), Some(_)) => nr.radius >= ns.radius * (1.0 - TIE),
                 (Some(_), None) => true,
                 _ => false,
             };

@@ -148,7 +148,13 @@ fn run(cli: Cli) -> Result<()> {
             json,
         } => {
             let (direct, stderr) = antiradiance::reference::sibling_paths(&exr);
-            check_outputs([Some(&exr), Some(&direct), Some(&stderr), output.as_ref(), json.as_ref()])?;
+            check_outputs([
+                Some(&exr),
+                Some(&direct),
+                Some(&stderr),
+                output.as_ref(),
+                json.as_ref(),
+            ])?;
             let mut s = load(scene)?;
             // The path tracer renders the scene's camera at the requested size.
             let camera = Options {

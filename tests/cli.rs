@@ -36,7 +36,11 @@ fn refused(args: &[&str], code: i32, needles: &[&str]) {
     let errors: Vec<&str> = e.lines().filter(|l| l.starts_with("Error:")).collect();
     assert_eq!(errors.len(), 1, "{args:?}: {e}");
     for n in needles {
-        assert!(errors[0].contains(n), "{args:?}: `{}` lacks `{n}`", errors[0]);
+        assert!(
+            errors[0].contains(n),
+            "{args:?}: `{}` lacks `{n}`",
+            errors[0]
+        );
     }
     assert!(!e.contains("validation"), "{args:?}: {e}");
 }
@@ -48,19 +52,44 @@ fn non_finite_and_out_of_range_flags_are_refused_naming_the_flag() {
     refused(&["render", s, "--exposure", "nan"], 2, &["--exposure"]);
     refused(&["render", s, "--exposure", "inf"], 2, &["--exposure"]);
     refused(&["render", s, "--tolerance", "nan"], 2, &["--tolerance"]);
-    refused(&["render", s, "--target-error", "-1"], 2, &["--target-error"]);
+    refused(
+        &["render", s, "--target-error", "-1"],
+        2,
+        &["--target-error"],
+    );
     refused(&["profile", s, "--frames", "0"], 2, &["--frames"]);
-    refused(&["render", s, "--iterations", "1000000"], 1, &["--iterations"]);
-    refused(&["render", s, "--max-iterations", "0"], 1, &["--max-iterations"]);
+    refused(
+        &["render", s, "--iterations", "1000000"],
+        1,
+        &["--iterations"],
+    );
+    refused(
+        &["render", s, "--max-iterations", "0"],
+        1,
+        &["--max-iterations"],
+    );
     refused(&["render", s, "--width", "0"], 1, &["--width"]);
     refused(&["render", s, "--bins", "7"], 1, &["--bins"]);
     // A negative number after a list flag is its value, refused by name.
     refused(
-        &["study", s, "--reference", "r.exr", "--out", "o", "--element-sizes", "-0.5"],
+        &[
+            "study",
+            s,
+            "--reference",
+            "r.exr",
+            "--out",
+            "o",
+            "--element-sizes",
+            "-0.5",
+        ],
         2,
         &["--element-sizes", "-0.5"],
     );
-    refused(&["render", s, "--device", "no such device"], 1, &["no such device"]);
+    refused(
+        &["render", s, "--device", "no such device"],
+        1,
+        &["no such device"],
+    );
 }
 
 #[test]
@@ -68,8 +97,22 @@ fn zero_iterations_render_direct_light_only_and_say_so() {
     let d = scratch("zero");
     let exr = d.join("z.exr");
     let o = bin()
-        .args(["render", scene().to_str().unwrap(), "--backend", "cpu", "--width", "8"])
-        .args(["--height", "8", "--iterations", "0", "--exr", exr.to_str().unwrap()])
+        .args([
+            "render",
+            scene().to_str().unwrap(),
+            "--backend",
+            "cpu",
+            "--width",
+            "8",
+        ])
+        .args([
+            "--height",
+            "8",
+            "--iterations",
+            "0",
+            "--exr",
+            exr.to_str().unwrap(),
+        ])
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
@@ -149,7 +192,14 @@ fn study_without_indirect_light_leaves_those_columns_empty_and_says_why() {
     // A lone triangle under a directional light: the reference has no indirect light at all.
     let reference = d.join("ref.exr");
     let o = bin()
-        .args(["reference", scene().to_str().unwrap(), "--spp", "4", "--width", "8"])
+        .args([
+            "reference",
+            scene().to_str().unwrap(),
+            "--spp",
+            "4",
+            "--width",
+            "8",
+        ])
         .args(["--height", "8", "--exr", reference.to_str().unwrap()])
         .output()
         .unwrap();
@@ -158,16 +208,27 @@ fn study_without_indirect_light_leaves_those_columns_empty_and_says_why() {
     let o = bin()
         .args(["study", scene().to_str().unwrap(), "--reference"])
         .arg(&reference)
-        .args(["--out", out.to_str().unwrap(), "--backend", "cpu", "--iterations", "1"])
-        .args(["--bins", "32", "--element-sizes", "0.5", "--spp", "1", "--one-scheme"])
+        .args([
+            "--out",
+            out.to_str().unwrap(),
+            "--backend",
+            "cpu",
+            "--iterations",
+            "1",
+        ])
+        .args([
+            "--bins",
+            "32",
+            "--element-sizes",
+            "0.5",
+            "--spp",
+            "1",
+            "--one-scheme",
+        ])
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    assert!(
-        stderr(&o).contains("no indirect light"),
-        "{}",
-        stderr(&o)
-    );
+    assert!(stderr(&o).contains("no indirect light"), "{}", stderr(&o));
     let csv = std::fs::read_to_string(out.join("study.csv")).unwrap();
     assert!(!csv.contains("inf") && !csv.contains("NaN"), "{csv}");
     for line in csv.lines().skip(1) {

@@ -229,20 +229,23 @@ impl Context {
         };
         // On failure before the device exists, the messenger goes before the instance (else the
         // layer reports the instance destroyed with a messenger still alive).
-        let abandon = |messenger: &Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>| unsafe {
+        let abandon = |messenger: &Option<(
+            ash::ext::debug_utils::Instance,
+            vk::DebugUtilsMessengerEXT,
+        )>| unsafe {
             if let Some((du, m)) = messenger {
                 du.destroy_debug_utils_messenger(*m, None);
             }
             instance.destroy_instance(None);
         };
-        let (physical_device, queue_family) =
-            match pick_device(&instance, opts.device_name.clone()) {
-                Ok(p) => p,
-                Err(e) => {
-                    abandon(&messenger);
-                    return Err(e);
-                }
-            };
+        let (physical_device, queue_family) = match pick_device(&instance, opts.device_name.clone())
+        {
+            Ok(p) => p,
+            Err(e) => {
+                abandon(&messenger);
+                return Err(e);
+            }
+        };
         let dev_exts = unsafe { instance.enumerate_device_extension_properties(physical_device) }
             .vk("listing device extensions")?;
         let has_lines = dev_exts

@@ -154,7 +154,11 @@ impl Truth {
             return Some("no REF.direct.exr beside the reference".into());
         };
         let mean = |img: &Image| {
-            img.pixels.iter().flatten().map(|v| v.abs() as f64).sum::<f64>()
+            img.pixels
+                .iter()
+                .flatten()
+                .map(|v| v.abs() as f64)
+                .sum::<f64>()
                 / (3 * img.pixels.len()).max(1) as f64
         };
         let full = mean(&self.image);
@@ -410,7 +414,11 @@ pub fn write(rows: &[Row], dir: &std::path::Path) -> Result<plot::Crossover> {
         std::io::Write::write_all(w, text.as_bytes())
     })?;
     // Plots go to a temporary file renamed when complete, like every other output.
-    fn whole<T>(dir: &std::path::Path, name: &str, draw: impl FnOnce(&std::path::Path) -> Result<T>) -> Result<T> {
+    fn whole<T>(
+        dir: &std::path::Path,
+        name: &str,
+        draw: impl FnOnce(&std::path::Path) -> Result<T>,
+    ) -> Result<T> {
         let (tmp, path) = (dir.join(format!(".{name}.partial.png")), dir.join(name));
         let out = draw(&tmp).and_then(|v| {
             std::fs::rename(&tmp, &path)
