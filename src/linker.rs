@@ -78,6 +78,9 @@ struct Ctx<'a> {
     els: &'a [Element],
     bins: &'a Bins,
     limit: f64,
+    /// Links made so far (all threads) and the most allowed.
+    made: std::sync::atomic::AtomicU64,
+    max_links: u64,
 }
 
 enum Step {
@@ -151,23 +154,41 @@ impl Ctx<'_> {
         }
     }
 
+    /// Refines the pair into links (recursion depth ≤ twice the hierarchy's, which median
+    /// splits keep logarithmic); stops early once more than `max_links` exist.
     fn refine(&self, r: u32, s: u32, out: &mut Vec<Link>) {
+        use std::sync::atomic::Ordering::Relaxed;
+        if self.made.load(Relaxed) > self.max_links {
+            return;
+        }
         match self.step(r, s) {
-            Step::Done(l) => out.extend(l),
+            Step::Done(l) => {
+                self.made.fetch_add(l.is_some() as u64, Relaxed);
+                out.extend(l)
+            }
             Step::Split(pairs) => pairs.into_iter().for_each(|(a, b)| self.refine(a, b, out)),
         }
     }
 }
 
 /// Builds all links of the scene, in parallel over all cores.
-/// `oracle` is τ: a link is refined while a node subtends more than τ·ω_bin.
-pub fn build_links(h: &Hierarchy, els: &[Element], bins: &Bins, oracle: f64) -> Links {
+/// `oracle` is τ: a link is refined while a node subtends more than τ·ω_bin. Refuses (stops
+/// early) when more than `max_links` links would be made.
+pub fn build_links(
+    h: &Hierarchy,
+    els: &[Element],
+    bins: &Bins,
+    oracle: f64,
+    max_links: u64,
+) -> crate::Result<Links> {
     let t0 = Instant::now();
     let ctx = Ctx {
         h,
         els,
         bins,
         limit: oracle * bins.omega,
+        made: std::sync::atomic::AtomicU64::new(0),
+        max_links,
     };
     // Expand breadth-first until there is enough independent work for every core.
     let mut tasks = vec![(0u32, 0u32)];
@@ -192,6 +213,15 @@ pub fn build_links(h: &Hierarchy, els: &[Element], bins: &Bins, oracle: f64) -> 
         })
         .collect();
     links.extend(rest.into_iter().flatten());
+    if links.len() as u64 > max_links {
+        return Err(crate::Error::Setting {
+            field: "oracle",
+            message: format!(
+                "more than {max_links} links (what this machine's memory holds) for {} elements at τ = {oracle}; use a larger solver.oracle, element size or fewer bins",
+                els.len()
+            ),
+        });
+    }
     links.par_sort_unstable_by_key(|l| (l.receiver, l.sender));
     let mut offsets = vec![0u32; h.len() + 1];
     for l in &links {
@@ -204,12 +234,12 @@ pub fn build_links(h: &Hierarchy, els: &[Element], bins: &Bins, oracle: f64) -> 
     for l in &links {
         used_classes[l.cone as usize] = true;
     }
-    Links {
+    Ok(Links {
         links,
         offsets,
         linking_ms: t0.elapsed().as_secs_f64() * 1e3,
         used_classes,
-    }
+    })
 }
 
 /// Smallest |cosine| between a leaf link's bin center and either plane (see [`exact_leaf_form_factors`]).

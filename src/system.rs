@@ -66,6 +66,14 @@ pub fn cpu_table_bytes(rows: u64, bins: u64) -> u64 {
     rows * bins * 24 * 5
 }
 
+/// Links the oracle makes, estimated before linking: every receiver gathers from senders of at
+/// most τ·ω_bin each over its sphere, about 2·m/τ of them (measured 2.1 per leaf and m/τ on the
+/// Cornell box), and never more than one per ordered pair of elements.
+pub fn estimate_links(elements: usize, bins: usize, oracle: f64) -> f64 {
+    let n = elements as f64;
+    (2.0 * n * bins as f64 / oracle).min(n * n)
+}
+
 impl System {
     /// Discretizes a scene with its `[solver]` settings.
     pub fn build(scene: &Scene) -> Result<Self> {
@@ -101,7 +109,20 @@ impl System {
         }
         let hierarchy = Hierarchy::build(&elements);
         let meshing_ms = t0.elapsed().as_secs_f64() * 1e3;
-        let mut links = build_links(&hierarchy, &elements, &bins, settings.oracle);
+        let max_links = crate::scene::max_links_limit();
+        let estimate = estimate_links(elements.len(), bins.count, settings.oracle);
+        if estimate > max_links as f64 {
+            return Err(Error::Setting {
+                field: "oracle",
+                message: format!(
+                    "about {estimate:.2e} links for {} elements × {} bins at τ = {}, more than the {max_links} this machine's memory holds; use a larger solver.oracle or element size, or fewer bins",
+                    elements.len(),
+                    bins.count,
+                    settings.oracle
+                ),
+            });
+        }
+        let mut links = build_links(&hierarchy, &elements, &bins, settings.oracle, max_links)?;
         let filters = FilterTables::new(&bins, &links.used_classes);
         let t1 = Instant::now();
         crate::linker::exact_leaf_form_factors(&mut links, &hierarchy, &elements, &bins, &filters);

@@ -39,6 +39,16 @@ pub const MIN_RELATIVE_RESOLUTION: f64 = 1e-9;
 pub const BYTES_PER_ELEMENT: usize =
     std::mem::size_of::<Element>() + 2 * std::mem::size_of::<Node>() + 3 * 4;
 
+/// Host memory one link takes while linking and solving (the CPU record, its sorted copy, the
+/// GPU record being packed), a budget for [`max_links_limit`].
+pub const BYTES_PER_LINK: u64 = 96;
+
+/// Most links the linker builds before it stops with an error: what this machine's memory
+/// holds (a tiny `oracle` or element size refines without end otherwise).
+pub fn max_links_limit() -> u64 {
+    physical_memory_bytes().map_or(1 << 30, |b| b / BYTES_PER_LINK)
+}
+
 /// Rows are `u32` indices and a hierarchy has `2n − 1` of them.
 const INDEX_LIMIT: usize = (u32::MAX / 2) as usize;
 

@@ -14,7 +14,7 @@ use std::path::PathBuf;
 
 pub use crate::settings::{Precision, Scheme};
 pub use limits::{
-    max_elements_limit, MAX_ANTIRADIANCE_STEPS, MAX_COORDINATE, MAX_ITERATIONS, MAX_SOURCE,
+    max_elements_limit, max_links_limit, MAX_ANTIRADIANCE_STEPS, MAX_COORDINATE, MAX_ITERATIONS, MAX_SOURCE,
     RELATIVE_ELEMENT_SIZE,
 };
 pub use load::load_scene;
