@@ -25,7 +25,7 @@ fn main() {
     let mut failures = Vec::new();
     for name in names {
         println!("cargo:rerun-if-changed=glsl/{name}");
-        if !(name.ends_with(".vert") || name.ends_with(".frag")) {
+        if !(name.ends_with(".vert") || name.ends_with(".frag") || name.ends_with(".comp")) {
             continue;
         }
         let spv = out.join(format!("{name}.spv"));

@@ -9,8 +9,12 @@ pub fn compile_glsl(
     include_dir: &std::path::Path,
     out: &std::path::Path,
 ) -> Result<Vec<u8>, String> {
+    // Compute shaders for Vulkan 1.3 get LocalSizeId, which needs the maintenance4 feature;
+    // the 1.2 environment keeps the plain workgroup size.
+    let compute = path.extension().is_some_and(|e| e == "comp");
+    let env = if compute { "--target-env=vulkan1.2" } else { "--target-env=vulkan1.3" };
     let output = std::process::Command::new(std::env::var("GLSLC").unwrap_or("glslc".into()))
-        .arg("--target-env=vulkan1.3")
+        .arg(env)
         .arg("-O")
         .arg("-g")
         .arg("-I")

@@ -21,6 +21,13 @@
 #define AR_BINDING_MATERIALS 11
 #define AR_BINDING_BIN_CENTERS 12
 #define AR_BINDING_LOBE_NORM 13
+#define AR_BINDING_CLUSTER_EX_ODD 14
+#define AR_BINDING_COMBOS 15
+#define AR_BINDING_RUNS 16
+#define AR_BINDING_LOBE_BINS 17
+
+// Link records (src/gpu/layout.rs GpuLink): rows in the low bits, combo halves above.
+#define AR_LINK_ROW_BITS 22u
 
 #define AR_MODE_BOTH 0u
 #define AR_MODE_REFLECT 1u
@@ -107,11 +114,20 @@ layout(push_constant) uniform PassConstants {
     float omega;
     uint flags;
     vec4 environment;  // rgb: environment radiance (scaled); a: source scale (a power of two)
+    uint grid_rows;    // nv: a row stores its bins column by column of the nu x nv grid
+    uvec3 pad;
 } pc;
+
+// Position of a bin within its table row: bin iv*nu + iu is stored at iu*nv + iv (one line per
+// run of positions draws a filter's footprint; src/gpu/tables.rs TableLayout::position).
+uint ar_position(uint bin) {
+    uint nu = pc.bins / pc.grid_rows;
+    return (bin % nu) * pc.grid_rows + bin / nu;
+}
 
 
 ivec2 ar_texel(uint row, uint bin) {
-    return ivec2((row / pc.rows_per_column) * pc.bins + bin, row % pc.rows_per_column);
+    return ivec2((row / pc.rows_per_column) * pc.bins + ar_position(bin), row % pc.rows_per_column);
 }
 
 ivec2 ar_row_texel(uint row) {
@@ -124,7 +140,9 @@ uint ar_row_at(ivec2 p) {
 }
 
 uint ar_bin_at(ivec2 p) {
-    return uint(p.x) % pc.bins;
+    uint position = uint(p.x) % pc.bins;
+    uint nu = pc.bins / pc.grid_rows;
+    return (position % pc.grid_rows) * nu + position / pc.grid_rows;
 }
 
 // Row of the per-row-image texel under a fragment.
@@ -147,6 +165,16 @@ vec3 ar_store(vec3 v) {
 vec4 ar_clip(vec2 p) {
     return vec4(p / vec2(pc.target_width, pc.target_height) * 2.0 - 1.0, 0.0, 1.0);
 }
+
+// One end of a line along `row` of a table at the left edge of the texel at `position`: a line
+// from position `lo` to `hi` covers exactly the texels [lo, hi) of the row (every line pass).
+vec4 ar_line_end(uint row, uint position) {
+    ivec2 t = ar_texel(row, 0u);
+    return ar_clip(vec2(float(t.x) + float(position) + pc.line_offset, float(t.y) + 0.5));
+}
+
+// A position outside the target: a line with both ends here draws nothing.
+const vec4 AR_NOWHERE = vec4(-2.0, -2.0, 0.0, 1.0);
 #endif  // AR_FRAME_PASS
 
 #endif

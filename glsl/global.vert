@@ -1,23 +1,44 @@
 #version 450
-// Global pass (eq. 16): one line per link across the receiver's row in L_in.
+// Global pass (eq. 16): a link is one line per run of receiver bins it reaches (its filter's
+// support, less the bins a leaf receiver never reads), drawn into the receiver's row of L_in.
+// The sender's I_ex is fetched once per line, here, and handed to the fragments flat.
 #include "common.glsl"
 
-layout(location = 0) in uvec4 link;      // receiver, sender, bin | layer << 16, lo | hi << 16
+layout(binding = AR_BINDING_LEAF_EX) uniform sampler2D leaf_ex;
+layout(binding = AR_BINDING_CLUSTER_EX) uniform sampler2D cluster_even;
+layout(binding = AR_BINDING_CLUSTER_EX_ODD) uniform sampler2D cluster_odd;
+layout(std430, binding = AR_BINDING_COMBOS) readonly buffer Combos { uvec2 combos[]; };
+layout(std430, binding = AR_BINDING_RUNS) readonly buffer Runs { uint runs[]; };
+
+layout(location = 0) in uvec2 link;      // receiver | combo_hi << 22, sender | combo_lo << 22
 layout(location = 1) in float form_factor;
 
-layout(location = 0) flat out ivec2 sender_texel;
+layout(location = 0) flat out vec3 sent;     // F · I_ex(sender, bin)
 layout(location = 1) flat out int filter_row;
-layout(location = 2) flat out float ff;
 
 void main() {
-    uint bin = link.z & 0xffffu;
-    uint layer = link.z >> 16;
-    uint lo = link.w & 0xffffu;
-    uint hi = link.w >> 16;
-    ivec2 t = ar_texel(link.x, 0u);
-    float x = float(t.x) + float(gl_VertexIndex == 0 ? lo : hi) + pc.line_offset;
-    gl_Position = ar_clip(vec2(x, float(t.y) + 0.5));
-    sender_texel = ar_texel(link.y, bin);
-    filter_row = int(layer * pc.bins + bin);
-    ff = form_factor;
+    uint mask = (1u << AR_LINK_ROW_BITS) - 1u;
+    uint receiver = link.x & mask;
+    uint sender = link.y & mask;
+    uint combo = ((link.x >> AR_LINK_ROW_BITS) << (32u - AR_LINK_ROW_BITS)) | (link.y >> AR_LINK_ROW_BITS);
+    uvec2 c = combos[combo];
+    uint bin = c.x & 0xffffu;
+    uint k = uint(gl_VertexIndex) >> 1;
+    if (k >= (c.y >> 24)) {
+        gl_Position = AR_NOWHERE;
+        return;
+    }
+    uint run = runs[(c.y & 0xffffffu) + k];
+    gl_Position = ar_line_end(receiver, (gl_VertexIndex & 1) == 0 ? run & 0xffffu : run >> 16);
+    filter_row = int((c.x >> 16) * pc.bins + bin);
+    // Flat outputs come from the first vertex of a line; the second one skips the fetches.
+    if ((gl_VertexIndex & 1) == 0) {
+        ivec2 s = ar_texel(sender, bin);
+        // Leaves and the two cluster parities live in separate images (zero elsewhere).
+        vec3 i_ex = texelFetch(leaf_ex, s, 0).rgb + texelFetch(cluster_even, s, 0).rgb
+            + texelFetch(cluster_odd, s, 0).rgb;
+        sent = i_ex * form_factor;
+    } else {
+        sent = vec3(0.0);
+    }
 }

@@ -6,9 +6,11 @@
 #ifndef ANTIRADIANCE_LOCAL_GLSL
 #define ANTIRADIANCE_LOCAL_GLSL
 #include "common.glsl"
+#include "bins.glsl"
 
 layout(binding = AR_BINDING_LEAF_EX) uniform sampler2D leaf_ex;
 layout(binding = AR_BINDING_L_PUSH) uniform sampler2D l_push;
+layout(binding = AR_BINDING_L_IN) uniform sampler2D l_in;
 layout(binding = AR_BINDING_IRRADIANCE_T) uniform sampler2D irradiance_t;
 layout(binding = AR_BINDING_IRRADIANCE_D) uniform sampler2D irradiance_d;
 layout(binding = AR_BINDING_ATTR_NORMAL_AREA) uniform sampler2D attr_normal_area;
@@ -17,13 +19,17 @@ layout(binding = AR_BINDING_DIRECT) uniform sampler2D direct;
 layout(binding = AR_BINDING_LOBE_NORM) uniform sampler2D lobe_norm;
 layout(std430, binding = AR_BINDING_MATERIALS) readonly buffer Materials { Material materials[]; };
 layout(std430, binding = AR_BINDING_BIN_CENTERS) readonly buffer BinCenters { vec4 centers[]; };
+// Per glossy lobe: bins+1 offsets (0xffffffff: every bin), then the lists (src/gpu/pack.rs).
+layout(std430, binding = AR_BINDING_LOBE_BINS) readonly buffer LobeBins { uint lobe_bins[]; };
 
 layout(location = 0) out vec4 out_ex;
 layout(location = 1) out vec4 out_total;
 
-// Incident radiance the leaf reflects and turns into antiradiance (links + environment).
-vec3 ar_lt(uint row, uint bin) {
-    vec3 l = texelFetch(l_push, ar_texel(row, bin), 0).rgb;
+// Incident radiance the leaf reflects and turns into antiradiance (links + environment). Push
+// leaves it in the L_push image at even depths and in the L_in image at odd ones (`odd`).
+vec3 ar_lt(uint row, uint bin, bool odd) {
+    ivec2 t = ar_texel(row, bin);
+    vec3 l = odd ? texelFetch(l_in, t, 0).rgb : texelFetch(l_push, t, 0).rgb;
     return AR_ENVIRONMENT ? l + pc.environment.rgb : l;
 }
 
@@ -49,6 +55,7 @@ void ar_local() {
     vec3 n = na.xyz;
     float a = na.w;
     float c = lf.x;
+    bool odd = lf.w != 0.0;
     Material mat = materials[uint(lf.y)];
     vec3 dir = centers[j].xyz;
     float cj = dot(dir, n);
@@ -64,14 +71,23 @@ void ar_local() {
             vec3 e_d = texelFetch(irradiance_d, ar_row_texel(row), 0).rgb;
             vec3 r_t = mat.kd.rgb / AR_PI * e_t;
             vec3 r_d = AR_DIRECT ? mat.kd.rgb / AR_PI * e_d : vec3(0.0);
-            if (AR_GLOSSY) {
-                for (uint l = 0u; l < pc.bins; ++l) {
+            if (AR_GLOSSY && mat.kd.a >= 0.0) {
+                // The truncated lobe (src/brdf.rs LOBE_CUTOFF): only incident bins listed for
+                // the mirror direction's bin, and of those only the ones inside the cone.
+                uint head = uint(mat.kd.a) * (pc.bins + 1u);
+                uint b = ar_bin_of(dir - 2.0 * dot(dir, n) * n, pc.bins / pc.grid_rows, pc.grid_rows);
+                uint first = lobe_bins[head + b];
+                bool all = first == 0xffffffffu;
+                uint count = all ? pc.bins : lobe_bins[head + b + 1u] - first;
+                for (uint k = 0u; k < count; ++k) {
+                    uint l = all ? k : lobe_bins[first + k];
                     vec3 inc = centers[l].xyz;
                     float cos_l = -dot(inc, n);
-                    if (cos_l > 0.0) {
+                    vec3 m = inc - 2.0 * dot(inc, n) * n;
+                    if (cos_l > 0.0 && dot(m, dir) > mat.ke.a) {
                         float factor = texelFetch(lobe_norm, ar_texel(row, l), 0).r;
                         vec3 f = ar_phong(mat.ks_ns.rgb, mat.ks_ns.a, n, inc, dir, factor) * (cos_l * pc.omega * c);
-                        r_t += f * ar_lt(row, l);
+                        r_t += f * ar_lt(row, l, odd);
                         if (AR_DIRECT) {
                             r_d += f * ar_ld(row, l);
                         }
@@ -86,7 +102,7 @@ void ar_local() {
         if (AR_MODE == AR_MODE_REFLECT) {
             ex = old;
         } else if (AR_ANTIRADIANCE) {
-            ex = -(a * c * -cj) * ar_lt(row, j);
+            ex = -(a * c * -cj) * ar_lt(row, j, odd);
         }
     }
     out_ex = vec4(ar_store(ex), 0.0);

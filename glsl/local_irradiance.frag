@@ -4,6 +4,7 @@
 #include "common.glsl"
 
 layout(binding = AR_BINDING_L_PUSH) uniform sampler2D l_push;
+layout(binding = AR_BINDING_L_IN) uniform sampler2D l_in;
 layout(binding = AR_BINDING_ATTR_NORMAL_AREA) uniform sampler2D attr_normal_area;
 layout(binding = AR_BINDING_ATTR_LEAF) uniform sampler2D attr_leaf;
 layout(binding = AR_BINDING_DIRECT) uniform sampler2D direct;
@@ -15,14 +16,18 @@ layout(location = 1) out vec4 e_d;
 void main() {
     uint row = ar_row_at_row_image(ivec2(gl_FragCoord.xy));
     vec3 n = texelFetch(attr_normal_area, ar_row_texel(row), 0).xyz;
-    float c = texelFetch(attr_leaf, ar_row_texel(row), 0).x;
+    vec4 lf = texelFetch(attr_leaf, ar_row_texel(row), 0);
+    float c = lf.x;
+    // Push leaves odd depths' incident radiance in the L_in image.
+    bool odd = lf.w != 0.0;
     vec3 st = vec3(0.0);
     vec3 sd = vec3(0.0);
     for (uint l = 0u; l < pc.bins; ++l) {
         float cos_l = -dot(centers[l].xyz, n);
         if (cos_l > 0.0) {
             float wt = cos_l * pc.omega * c;
-            vec3 lt = texelFetch(l_push, ar_texel(row, l), 0).rgb;
+            ivec2 t = ar_texel(row, l);
+            vec3 lt = odd ? texelFetch(l_in, t, 0).rgb : texelFetch(l_push, t, 0).rgb;
             st += (AR_ENVIRONMENT ? lt + pc.environment.rgb : lt) * wt;
             if (AR_DIRECT) {
                 sd += texelFetch(direct, ar_texel(row, l), 0).rgb * wt;

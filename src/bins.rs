@@ -87,6 +87,26 @@ impl Bins {
         iv * self.nu + iu
     }
 
+    /// Largest angle between a bin's center and any point of its cell (sampled along the cell's
+    /// edges, with a 1% margin): a direction's bin center is never farther from it.
+    pub fn cell_radius(&self) -> f64 {
+        let (nu, nv) = (self.nu as f64, self.nv as f64);
+        let mut worst: f64 = 0.0;
+        for b in 0..self.count {
+            let (iu, iv) = ((b % self.nu) as f64, (b / self.nu) as f64);
+            for k in 0..=8 {
+                let t = k as f64 / 8.0;
+                for (fu, fv) in [(t, 0.0), (t, 1.0), (0.0, t), (1.0, t)] {
+                    let u = (iu + fu) / nu * 2.0 - 1.0;
+                    let v = (iv + fv) / nv * 2.0 - 1.0;
+                    let d = square_to_direction(u, v);
+                    worst = worst.max(d.dot(self.centers[b]).clamp(-1.0, 1.0).acos());
+                }
+            }
+        }
+        worst * 1.01
+    }
+
     /// Angular distance between neighbouring bin centers, `√(4π/m)`: the Gaussian's deviation (§3.1).
     pub fn spacing(&self) -> f64 {
         self.omega.sqrt()

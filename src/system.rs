@@ -57,6 +57,9 @@ pub struct System {
     pub lobe_slot: Vec<u32>,
 }
 
+/// Cosine margin of [`System::reads`]: bins this close to a leaf's plane count as read.
+pub const READ_MARGIN: f64 = 1e-4;
+
 /// Upper bound on host memory the CPU tables may take.
 pub const CPU_TABLE_LIMIT_BYTES: u64 = 12 << 30;
 
@@ -172,6 +175,18 @@ impl System {
         let k = *self.lobe_slot.get(li)?;
         let m = self.bins.count;
         (k != u32::MAX).then(|| &self.lobe_norm[k as usize * m..(k as usize + 1) * m])
+    }
+
+    /// Whether the local pass of `node` reads its incident radiance in `bin`: a leaf reads only
+    /// light arriving at its front (travel direction against its normal), for reflection and
+    /// for the antiradiance it sends on; clusters pass everything down. The global pass skips
+    /// what no one reads. Bins within [`READ_MARGIN`] of the leaf's plane are kept, so that a
+    /// float32 shader and this f64 test never disagree about a bin the local pass uses.
+    pub fn reads(&self, node: u32, bin: usize) -> bool {
+        match self.leaf_slot[node as usize] {
+            u32::MAX => true,
+            slot => self.bins.centers[bin].dot(self.leaves[slot as usize].normal) < READ_MARGIN,
+        }
     }
 
     /// Number of table rows (hierarchy nodes).

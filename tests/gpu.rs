@@ -3,7 +3,6 @@
 
 mod common;
 
-use antiradiance::gpu::layout::GpuLink;
 use antiradiance::gpu::tables::TableLayout;
 use antiradiance::gpu::{Context, GpuOptions, GpuSolver};
 use antiradiance::scene::{load_scene, Precision, Scene, Scheme};
@@ -80,17 +79,7 @@ fn lines_cover_each_intended_texel_exactly_once() {
         (6, 0, 16),
         (2, 7, 13),
     ];
-    let links: Vec<GpuLink> = spans
-        .iter()
-        .map(|&(r, lo, hi)| GpuLink {
-            receiver: r,
-            sender: 0,
-            bin_layer: 0,
-            span: lo | (hi << 16),
-            form_factor: 1.0,
-        })
-        .collect();
-    let hits = antiradiance::gpu::diagnostics::line_coverage(&ctx, &layout, &links).unwrap();
+    let hits = antiradiance::gpu::diagnostics::line_coverage(&ctx, &layout, &spans).unwrap();
     let w = layout.width();
     for r in 0..7 {
         for j in 0..16 {
@@ -98,8 +87,8 @@ fn lines_cover_each_intended_texel_exactly_once() {
                 .iter()
                 .filter(|s| s.0 == r && j >= s.1 && j < s.2)
                 .count() as f32;
-            let (x, y) = layout.texel(r, j);
-            assert_eq!(hits[(y * w + x) as usize], want, "row {r} bin {j}");
+            let (x, y) = layout.position_texel(r, j);
+            assert_eq!(hits[(y * w + x) as usize], want, "row {r} position {j}");
         }
     }
     // Nothing outside the rows in use (the last column block has one unused row slot... here 7 = 3+3+1).
@@ -363,4 +352,48 @@ fn embeds_in_a_host_device_and_command_buffer() {
     drop(engine);
     drop(embedded);
     assert_clean(&host);
+}
+
+/// The convergence figures the GPU reduces on the device (16 bytes per iteration) are the CPU
+/// monitor's: the same residual, change, exitant flux and peak, in both schemes (the asymmetric
+/// one measures from a snapshot of the iteration's start), up to float32 summation.
+#[test]
+fn reduced_figures_equal_the_cpu_definition() {
+    use antiradiance::solver::convergence::Figures;
+    let ctx = context();
+    let scene = small("scenes/cornell-box.toml", 32, 0.5);
+    let sys = System::build(&scene).unwrap();
+    for scheme in [Scheme::Symmetric, Scheme::Asymmetric] {
+        let mut gpu = GpuSolver::new(
+            ctx.clone(),
+            &sys,
+            GpuOptions {
+                precision: Precision::F32,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        let mut cpu = CpuSolver::new(&sys);
+        cpu.initialize();
+        gpu.initialize().unwrap();
+        let got = gpu.iterate_batch(scheme, 4, 3).unwrap();
+        assert_eq!(got.len(), 3);
+        let mut worst: f64 = 0.0;
+        for g in got {
+            let before = cpu.i_ex.clone();
+            cpu.iterate(scheme, 4);
+            let want = Figures::between(&sys, &before, &cpu.i_ex);
+            for (a, b) in [
+                (g.change.relative, want.change.relative),
+                (g.change.absolute, want.change.absolute),
+                (g.flux, want.flux),
+                (g.peak, want.peak),
+            ] {
+                worst = worst.max((a - b).abs() / b.abs().max(1e-30));
+            }
+        }
+        println!("{scheme:?}: reduced figures within {worst:.2e} of the CPU's");
+        assert!(worst < 1e-6, "{scheme:?}: {worst:.2e}");
+    }
+    assert_clean(&ctx);
 }

@@ -9,6 +9,7 @@ use crate::gpu::memory::MemoryReport;
 use crate::gpu::Context;
 use crate::scene::{Precision, Scheme};
 use crate::settings::BackendKind;
+use crate::solver::convergence::Figures;
 use crate::solver::Table;
 use std::sync::Arc;
 
@@ -23,9 +24,16 @@ pub trait Backend {
     fn prepare_lights(&mut self, prep: &mut Prepared) -> Result<()>;
     /// The initial state (emission, environment, direct light; no propagation).
     fn initialize(&mut self, prep: &Prepared) -> Result<()>;
-    /// One iteration of `scheme` with `antiradiance_steps` (asymmetric).
-    fn iterate(&mut self, prep: &Prepared, scheme: Scheme, antiradiance_steps: usize)
-        -> Result<()>;
+    /// `n` iterations of `scheme` with `antiradiance_steps` (asymmetric), as one batch (the GPU
+    /// submits them at once and reduces the convergence figures on the device), returning the
+    /// figures of each.
+    fn iterate_batch(
+        &mut self,
+        prep: &Prepared,
+        scheme: Scheme,
+        antiradiance_steps: usize,
+        n: usize,
+    ) -> Result<Vec<Figures>>;
     /// The current I_ex (unscaled).
     fn i_ex(&mut self) -> Result<Table>;
     /// The current display intensity I_total (unscaled).

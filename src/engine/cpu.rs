@@ -9,6 +9,7 @@ use crate::gpu::memory::MemoryReport;
 use crate::raycast::RayCaster;
 use crate::scene::{Precision, Scheme};
 use crate::settings::BackendKind;
+use crate::solver::convergence::Figures;
 use crate::solver::{CpuSolver, CpuState, Table};
 use std::time::Instant;
 
@@ -90,11 +91,25 @@ impl Backend for CpuBackend {
         Ok(())
     }
 
-    fn iterate(&mut self, prep: &Prepared, scheme: Scheme, steps: usize) -> Result<()> {
+    fn iterate_batch(
+        &mut self,
+        prep: &Prepared,
+        scheme: Scheme,
+        steps: usize,
+        n: usize,
+    ) -> Result<Vec<Figures>> {
         let t = Instant::now();
-        self.with_solver(prep, |s| s.iterate(scheme, steps));
+        let figures = self.with_solver(prep, |s| {
+            (0..n)
+                .map(|_| {
+                    let before = s.i_ex.clone();
+                    s.iterate(scheme, steps);
+                    Figures::between(s.sys, &before, &s.i_ex)
+                })
+                .collect()
+        });
         self.time("solve", t);
-        Ok(())
+        Ok(figures)
     }
 
     fn i_ex(&mut self) -> Result<Table> {

@@ -8,7 +8,7 @@ use super::prepared::Prepared;
 use crate::error::{Error, Result};
 use crate::progress::Progress;
 use crate::scene::Scheme;
-use crate::solver::convergence::{change, exitant_flux, max_abs, Monitor, Verdict};
+use crate::solver::convergence::{Monitor, Verdict};
 
 /// What the loop did.
 #[derive(Debug, Clone, Default)]
@@ -27,10 +27,20 @@ pub(crate) struct Outcome {
     pub estimated_error: Option<f64>,
 }
 
-/// Iterates `solver` per `prep.settings`. `initialized()` is called once, after the first
-/// initial state; `frame(k, solver)` is called for the frames wanted: after every iteration
-/// when `every_iteration`, else only for the result; `k` counts the iterations of the current
-/// run (a restart begins again at 0 and says so in the fallbacks).
+/// Iterations per batch: one submission and one fence wait on the GPU per batch, the
+/// convergence figures of each iteration reduced on the device (16 bytes read back each). Four
+/// is the paper's iterations per frame; the monitor judges after every batch, so a tolerance
+/// run may do up to three iterations more than it needed.
+pub const BATCH: usize = 4;
+
+/// Most iterations one batch holds ([`crate::gpu::reduce::MAX_BATCH`]).
+pub const BATCH_LIMIT: usize = crate::gpu::reduce::MAX_BATCH;
+
+/// Iterates `solver` per `prep.settings`, in batches of [`BATCH`] (one when a frame is wanted
+/// after every iteration). `initialized()` is called once, after the first initial state;
+/// `frame(k, solver)` is called for the frames wanted: after every iteration when
+/// `every_iteration`, else only for the result; `k` counts the iterations of the current run
+/// (a restart begins again at 0 and says so in the fallbacks).
 pub(crate) fn drive(
     prep: &Prepared,
     solver: &mut dyn Backend,
@@ -39,11 +49,12 @@ pub(crate) fn drive(
     initialized: &mut dyn FnMut(),
     frame: &mut dyn FnMut(usize, &mut dyn Backend) -> Result<()>,
 ) -> Result<Outcome> {
-    let (sys, settings) = (&prep.system, &prep.settings);
+    let settings = &prep.settings;
     let mut first = true;
     let mut out = Outcome::default();
     let mut scheme = settings.scheme;
     let mut monitor = Monitor::new(settings);
+    let batch = if every_iteration { 1 } else { BATCH };
     // Iterations to run without judging, after both schemes grew: the best iterate is re-run.
     let mut replay: Option<usize> = None;
     progress.begin("iterations", monitor.limit as u64);
@@ -52,58 +63,60 @@ pub(crate) fn drive(
         if std::mem::take(&mut first) {
             initialized();
         }
-        let mut before = solver.i_ex()?;
         monitor.restart();
-        if monitor.limit == 0 || replay == Some(0) {
+        let end = replay.unwrap_or(monitor.limit);
+        if end == 0 {
             frame(0, solver)?;
             break;
         }
-        for k in 1.. {
-            solver.iterate(prep, scheme, settings.antiradiance_steps)?;
-            let after = solver.i_ex()?;
-            let peak = max_abs(&after);
-            let limit = solver.overflow_limit();
-            if peak > limit {
-                if let Some(wider) = solver.widen(prep)? {
-                    out.fallbacks.push(format!(
-                        "float16 tables overflow at iteration {k} (largest |I_ex| {peak:.3e}, limit {limit:.3e} at this scale); {wider}; restarted"
-                    ));
-                    continue 'run;
+        let mut k = 0;
+        while k < end {
+            let n = (end - k).min(batch);
+            let figures = solver.iterate_batch(prep, scheme, settings.antiradiance_steps, n)?;
+            // The first verdict that ends the run decides; the batch's later iterations are
+            // recorded too (their state is the one drawn).
+            let mut decided: Option<Verdict> = None;
+            for f in figures {
+                k += 1;
+                let limit = solver.overflow_limit();
+                if f.peak > limit {
+                    if let Some(wider) = solver.widen(prep)? {
+                        out.fallbacks.push(format!(
+                            "float16 tables overflow at iteration {k} (largest |I_ex| {:.3e}, limit {limit:.3e} at this scale); {wider}; restarted",
+                            f.peak
+                        ));
+                        continue 'run;
+                    }
+                }
+                let verdict = monitor.record(f.change, f.flux);
+                progress.advance(1);
+                if replay.is_none() && decided.is_none() && verdict != Verdict::Continue {
+                    decided = Some(verdict);
                 }
             }
-            let verdict = monitor.record(change(sys, &before, &after), exitant_flux(sys, &after));
-            before = after;
-            progress.advance(1);
-            if let Some(n) = replay {
-                if k == n {
-                    frame(k, solver)?;
-                    break 'run;
-                }
-                continue;
-            }
-            match verdict {
-                Verdict::Continue => {
-                    if every_iteration {
+            match decided {
+                None if replay.is_some() || k < end => {
+                    if every_iteration && replay.is_none() {
                         frame(k, solver)?;
                     }
                 }
-                Verdict::Done => {
+                None | Some(Verdict::Done) | Some(Verdict::Continue) => {
                     frame(k, solver)?;
                     break 'run;
                 }
-                Verdict::Cap(why) => {
+                Some(Verdict::Cap(why)) => {
                     out.warnings.push(why);
                     frame(k, solver)?;
                     break 'run;
                 }
-                Verdict::Diverging(why) if scheme == Scheme::Symmetric => {
+                Some(Verdict::Diverging(why)) if scheme == Scheme::Symmetric => {
                     out.fallbacks.push(format!(
                         "the symmetric scheme does not converge here ({why}); restarted with the asymmetric scheme"
                     ));
                     scheme = Scheme::Asymmetric;
                     continue 'run;
                 }
-                Verdict::Diverging(why) => {
+                Some(Verdict::Diverging(why)) => {
                     // Keep the iterate with the smallest residual before growth took over.
                     let (best, r) = monitor
                         .residuals
@@ -120,6 +133,9 @@ pub(crate) fn drive(
                 }
             }
         }
+        // A replay ends at the iteration it re-ran to.
+        frame(k, solver)?;
+        break;
     }
     progress.end();
     out.residuals = monitor.residuals.clone();

@@ -14,6 +14,7 @@ use crate::gpu::solver::Fragments;
 use crate::gpu::{Context, GpuOptions, GpuSolver};
 use crate::scene::{Precision, Scheme};
 use crate::settings::BackendKind;
+use crate::solver::convergence::Figures;
 use crate::solver::Table;
 use ash::vk;
 use std::sync::Arc;
@@ -169,11 +170,17 @@ impl Backend for GpuBackend {
         Ok(())
     }
 
-    fn iterate(&mut self, _: &Prepared, scheme: Scheme, steps: usize) -> Result<()> {
-        self.solver.iterate(scheme, steps)?;
+    fn iterate_batch(
+        &mut self,
+        _: &Prepared,
+        scheme: Scheme,
+        steps: usize,
+        n: usize,
+    ) -> Result<Vec<Figures>> {
+        let figures = self.solver.iterate_batch(scheme, steps, n)?;
         let t = self.solver.timings().to_vec();
         self.collect(&t);
-        Ok(())
+        Ok(figures)
     }
 
     fn i_ex(&mut self) -> Result<Table> {

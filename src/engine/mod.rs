@@ -168,9 +168,12 @@ impl Engine {
     /// convergence monitor: what `profile` times and what a host runs per frame.
     pub fn iterate(&mut self, n: usize) -> Result<()> {
         let s = &self.prep.settings;
-        for _ in 0..n {
+        let mut done = 0;
+        while done < n {
+            let k = (n - done).min(drive::BATCH_LIMIT);
             self.backend
-                .iterate(&self.prep, s.scheme, s.antiradiance_steps)?;
+                .iterate_batch(&self.prep, s.scheme, s.antiradiance_steps, k)?;
+            done += k;
         }
         Ok(())
     }

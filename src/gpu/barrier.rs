@@ -48,7 +48,9 @@ impl Access {
                     | vk::AccessFlags2::DEPTH_STENCIL_ATTACHMENT_WRITE,
             ),
             Access::Sampled => (
-                vk::PipelineStageFlags2::VERTEX_SHADER | vk::PipelineStageFlags2::FRAGMENT_SHADER,
+                vk::PipelineStageFlags2::VERTEX_SHADER
+                    | vk::PipelineStageFlags2::FRAGMENT_SHADER
+                    | vk::PipelineStageFlags2::COMPUTE_SHADER,
                 vk::AccessFlags2::SHADER_SAMPLED_READ,
             ),
             Access::TransferSrc => (

@@ -25,25 +25,90 @@ pub struct PassConstants {
     /// Constant environment radiance times the source scale (rgb); the source scale (a), a
     /// power of two that every emitted radiance is multiplied by to centre values in float16's range.
     pub environment: [f32; 4],
+    /// Rows `nv` of the bins' grid: a row stores its bins column by column of the grid
+    /// ([`super::tables::TableLayout::position`]).
+    pub grid_rows: u32,
+    /// Padding to 16 bytes.
+    pub pad: [u32; 3],
 }
 
 /// `PassConstants::flags` bit: tables are float16; shaders round stores to nearest.
 pub const FLAG_HALF: u32 = 2;
 
-/// One link as the global pass's per-instance vertex data (20 bytes).
+/// Bits of a row index in a [`GpuLink`] (the rest of each word carries half the combo index).
+pub const LINK_ROW_BITS: u32 = 22;
+/// Rows a [`GpuLink`] can address.
+pub const LINK_MAX_ROWS: u32 = 1 << LINK_ROW_BITS;
+/// Combos a [`GpuLink`] can address (two halves of 10 bits).
+pub const LINK_MAX_COMBOS: u32 = 1 << (2 * (32 - LINK_ROW_BITS));
+
+/// One link as the global pass's per-instance vertex data (12 bytes): the receiver and sender
+/// rows, each with half of the link's combo index (central bin, filter layer and the receiver
+/// bin runs it covers, shared by all links alike in those), and the form factor.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct GpuLink {
-    /// Receiver row.
-    pub receiver: u32,
-    /// Sender row.
-    pub sender: u32,
-    /// Central bin (low 16 bits) and filter-table layer (high 16 bits).
-    pub bin_layer: u32,
-    /// Receiver bins covered: first (low 16 bits) and one past the last (high 16 bits).
-    pub span: u32,
+    /// Receiver row (low 22 bits), combo index bits 10..20 (high 10 bits).
+    pub receiver_combo: u32,
+    /// Sender row (low 22 bits), combo index bits 0..10 (high 10 bits).
+    pub sender_combo: u32,
     /// Form factor (eq. 17 with the exact-leaf calibration).
     pub form_factor: f32,
+}
+
+impl GpuLink {
+    /// Packs a link; rows below [`LINK_MAX_ROWS`], combo below [`LINK_MAX_COMBOS`].
+    pub fn new(receiver: u32, sender: u32, combo: u32, form_factor: f32) -> Self {
+        debug_assert!(receiver < LINK_MAX_ROWS && sender < LINK_MAX_ROWS);
+        debug_assert!(combo < LINK_MAX_COMBOS);
+        let half = 32 - LINK_ROW_BITS;
+        Self {
+            receiver_combo: receiver | (combo >> half) << LINK_ROW_BITS,
+            sender_combo: sender | (combo & ((1 << half) - 1)) << LINK_ROW_BITS,
+            form_factor,
+        }
+    }
+
+    /// (receiver, sender, combo), as the vertex shader unpacks them.
+    pub fn unpack(&self) -> (u32, u32, u32) {
+        let mask = LINK_MAX_ROWS - 1;
+        let half = 32 - LINK_ROW_BITS;
+        (
+            self.receiver_combo & mask,
+            self.sender_combo & mask,
+            (self.receiver_combo >> LINK_ROW_BITS) << half | self.sender_combo >> LINK_ROW_BITS,
+        )
+    }
+}
+
+/// What links with the same central bin, filter layer and receiver runs share (8 bytes, a
+/// storage-buffer record): `bin | layer << 16` and `first_run | run_count << 24`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
+pub struct GpuCombo {
+    /// Central bin (low 16 bits) and filter-table layer (high 16 bits).
+    pub bin_layer: u32,
+    /// First run in the run buffer (low 24 bits) and the number of runs (high 8 bits).
+    pub runs: u32,
+}
+
+/// Most runs one combo may have (8 bits).
+pub const MAX_RUNS: u32 = 255;
+
+/// One run of consecutive receiver bins `[first, end)` (a storage-buffer record).
+pub fn pack_run(first: u32, end: u32) -> u32 {
+    first | end << 16
+}
+
+/// A row and a second row the pass reads (push: the parent; pull: the right child, the left
+/// being the next row), drawn as one line across the first row.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct RowPair {
+    /// Row written.
+    pub row: u32,
+    /// Row read besides it (`u32::MAX`: none).
+    pub other: u32,
 }
 
 /// A quad covering whole rows `[first, end)` of one column block; `source` is the row the push
@@ -59,25 +124,16 @@ pub struct QuadInstance {
     pub end: u32,
 }
 
-/// One pull line: the leaf's row is added to the ancestor's.
-#[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct PullLine {
-    /// Leaf row read.
-    pub leaf: u32,
-    /// Ancestor row written.
-    pub ancestor: u32,
-}
-
 /// A material in the storage buffer (std430, `Material` in common.glsl).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct GpuMaterial {
-    /// Diffuse albedo (rgb), a unused.
+    /// Diffuse albedo (rgb); the solver's record: the lobe's index in the lobe-bins buffer (a,
+    /// −1 without a lobe).
     pub kd: [f32; 4],
     /// Specular albedo (rgb) and Phong exponent (a).
     pub ks_ns: [f32; 4],
-    /// Emitted radiance (rgb), a unused.
+    /// Emitted radiance (rgb); the solver's record: the lobe's truncation cosine (a).
     pub ke: [f32; 4],
 }
 
@@ -136,10 +192,20 @@ pub mod binding {
     pub const BIN_CENTERS: u32 = 12;
     /// Glossy leaves' lobe factor per incident bin (R32, table layout; 1×1 without glossy leaves).
     pub const LOBE_NORM: u32 = 13;
+    /// Clusters' I_ex at odd depths (`CLUSTER_EX` holds the even depths): pull writes one
+    /// parity per level while reading the other.
+    pub const CLUSTER_EX_ODD: u32 = 14;
+    /// Link combos (storage: [`super::GpuCombo`]).
+    pub const COMBOS: u32 = 15;
+    /// Receiver bin runs of the combos (storage: [`super::pack_run`]).
+    pub const RUNS: u32 = 16;
+    /// Incident bins each glossy lobe's truncated cone can reach, per mirror bin (storage:
+    /// [`crate::gpu::pack::lobe_bins`]).
+    pub const LOBE_BINS: u32 = 17;
     /// Number of bindings.
-    pub const COUNT: u32 = 14;
+    pub const COUNT: u32 = 18;
     /// Storage-buffer bindings (the rest are combined image samplers).
-    pub const BUFFERS: [u32; 2] = [MATERIALS, BIN_CENTERS];
+    pub const BUFFERS: [u32; 5] = [MATERIALS, BIN_CENTERS, COMBOS, RUNS, LOBE_BINS];
 }
 
 /// Push constants of the frame passes (`FrameConstants` in common.glsl, 128 bytes: the
@@ -332,9 +398,10 @@ mod tests {
 
     #[test]
     fn push_constants_match_glsl() {
-        assert_eq!(size_of::<PassConstants>(), 48);
+        assert_eq!(size_of::<PassConstants>(), 64);
         assert_eq!(offset_of!(PassConstants, omega), 24);
         assert_eq!(offset_of!(PassConstants, environment), 32);
+        assert_eq!(offset_of!(PassConstants, grid_rows), 48);
         assert_eq!(
             glsl_fields("PassConstants"),
             [
@@ -346,17 +413,29 @@ mod tests {
                 "line_offset",
                 "omega",
                 "flags",
-                "environment"
+                "environment",
+                "grid_rows",
+                "pad"
             ]
         );
     }
 
     #[test]
     fn vertex_and_buffer_records() {
-        assert_eq!(size_of::<GpuLink>(), 20);
-        assert_eq!(offset_of!(GpuLink, form_factor), 16);
+        assert_eq!(size_of::<GpuLink>(), 12);
+        assert_eq!(offset_of!(GpuLink, form_factor), 8);
+        assert_eq!(size_of::<GpuCombo>(), 8);
         assert_eq!(size_of::<QuadInstance>(), 12);
-        assert_eq!(size_of::<PullLine>(), 8);
+        assert_eq!(size_of::<RowPair>(), 8);
+        for (r, s, c) in [
+            (0, 0, 0),
+            (LINK_MAX_ROWS - 1, 7, LINK_MAX_COMBOS - 1),
+            (5, LINK_MAX_ROWS - 1, 1234),
+        ] {
+            assert_eq!(GpuLink::new(r, s, c, 1.5).unpack(), (r, s, c));
+        }
+        let common = COMMON;
+        assert!(common.contains(&format!("#define AR_LINK_ROW_BITS {LINK_ROW_BITS}u\n")));
         assert_eq!(size_of::<GpuMaterial>(), 48);
         assert_eq!(offset_of!(GpuMaterial, ke), 32);
         assert_eq!(glsl_fields("Material"), ["kd", "ks_ns", "ke"]);
@@ -430,6 +509,10 @@ mod tests {
             ("MATERIALS", binding::MATERIALS),
             ("BIN_CENTERS", binding::BIN_CENTERS),
             ("LOBE_NORM", binding::LOBE_NORM),
+            ("CLUSTER_EX_ODD", binding::CLUSTER_EX_ODD),
+            ("COMBOS", binding::COMBOS),
+            ("RUNS", binding::RUNS),
+            ("LOBE_BINS", binding::LOBE_BINS),
         ];
         assert_eq!(consts.len() as u32, binding::COUNT);
         for (name, value) in consts {

@@ -15,6 +15,7 @@ pub mod pack;
 pub mod passes;
 pub mod pipelines;
 pub mod profiler;
+pub mod reduce;
 pub mod resources;
 pub mod shaders;
 pub mod solver;

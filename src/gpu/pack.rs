@@ -67,7 +67,8 @@ pub fn decode_r32(bytes: &[u8]) -> Vec<f32> {
 }
 
 /// Per-row attribute texels of the leaves: (normal, area) and (cosine normalization, material,
-/// leaf flag); cluster rows are zero. `layout.columns × layout.rows_per_column` texels each.
+/// leaf flag, depth parity: push leaves odd depths' incident radiance in the L_in image);
+/// cluster rows are zero. `layout.columns × layout.rows_per_column` texels each.
 pub fn attributes(sys: &System, layout: &TableLayout) -> (Vec<[f32; 4]>, Vec<[f32; 4]>) {
     let (rw, rh) = (layout.columns, layout.rows_per_column);
     let mut na = vec![[0.0f32; 4]; (rw * rh) as usize];
@@ -77,7 +78,8 @@ pub fn attributes(sys: &System, layout: &TableLayout) -> (Vec<[f32; 4]>, Vec<[f3
         let i = (y * rw + x) as usize;
         let n = leaf.normal;
         na[i] = [n.x as f32, n.y as f32, n.z as f32, leaf.area as f32];
-        lf[i] = [leaf.cos_norm as f32, leaf.material as f32, 1.0, 0.0];
+        let odd = sys.hierarchy.nodes[leaf.node as usize].depth % 2;
+        lf[i] = [leaf.cos_norm as f32, leaf.material as f32, 1.0, odd as f32];
     }
     (na, lf)
 }
@@ -116,13 +118,101 @@ pub fn filter_tables(sys: &System) -> Vec<f32> {
     ft
 }
 
-/// The solver's material records, with each glossy material's exponent as the bins sample it.
+/// The solver's material records: each glossy material's exponent as the bins sample it, its
+/// lobe's truncation cosine (`ke.w`) and the index of its bin neighbourhoods in
+/// [`lobe_bins`] (`kd.w`, −1 without a lobe).
 pub fn solver_materials(sys: &System) -> Vec<GpuMaterial> {
+    let mut class = 0.0f32;
     sys.materials
         .iter()
         .zip(&sys.lobes)
-        .map(|(m, lobe)| GpuMaterial::with_exponent(m, lobe.map_or(m.ns, |l| l.exponent)))
+        .map(|(m, lobe)| {
+            let mut g = GpuMaterial::with_exponent(m, lobe.map_or(m.ns, |l| l.exponent));
+            if let Some(l) = lobe {
+                g.kd[3] = class;
+                g.ke[3] = l.cos_cut as f32;
+                class += 1.0;
+            } else {
+                g.kd[3] = -1.0;
+            }
+            g
+        })
         .collect()
+}
+
+/// Offset marking a lobe whose neighbourhood is every bin (the shader loops over all of them).
+pub const ALL_BINS: u32 = u32::MAX;
+
+/// For every glossy material's lobe, the incident bins that can be in its truncated cone around
+/// a mirror direction in each bin: `bins + 1` offsets per lobe (into this same buffer, or
+/// [`ALL_BINS`] when the cone is too wide to be worth a list), then the lists. Bin `l` is listed
+/// for bin `b` when its center lies within the cone's angle plus [`crate::bins::Bins::cell_radius`]
+/// of `b`'s center, so every term the cone keeps is found.
+pub fn lobe_bins(sys: &System) -> Vec<u32> {
+    let m = sys.bins.count;
+    let lobes: Vec<_> = sys.lobes.iter().flatten().collect();
+    if lobes.is_empty() {
+        return Vec::new();
+    }
+    let radius = sys.bins.cell_radius();
+    let mut out = vec![0u32; lobes.len() * (m + 1)];
+    for (k, lobe) in lobes.iter().enumerate() {
+        let reach = lobe.cos_cut.clamp(-1.0, 1.0).acos() + radius;
+        let head = k * (m + 1);
+        // A cone reaching past a hemisphere lists more than half the bins: loop over all.
+        if reach >= std::f64::consts::FRAC_PI_2 {
+            out[head..head + m + 1].fill(ALL_BINS);
+            continue;
+        }
+        let cos_reach = reach.cos();
+        for b in 0..m {
+            out[head + b] = out.len() as u32;
+            let c = sys.bins.centers[b];
+            let near: Vec<u32> = (0..m as u32)
+                .filter(|&l| sys.bins.centers[l as usize].dot(c) >= cos_reach)
+                .collect();
+            out.extend(near);
+        }
+        out[head + m] = out.len() as u32;
+    }
+    out
+}
+
+/// Phong-sum terms the local pass evaluates per propagation (the glossy leaves' front bins times
+/// the incident bins listed for each one's mirror direction).
+pub fn glossy_terms(sys: &System, lobe_bins: &[u32]) -> u64 {
+    let m = sys.bins.count;
+    let mut class = vec![None; sys.materials.len()];
+    let mut k = 0;
+    for (i, l) in sys.lobes.iter().enumerate() {
+        if l.is_some() {
+            class[i] = Some(k);
+            k += 1;
+        }
+    }
+    sys.leaves
+        .iter()
+        .map(|leaf| {
+            // Lambertian leaves (in the Phong pass only with every pass on) have no lobe to sum.
+            let Some(k) = class[leaf.material as usize] else {
+                return 0;
+            };
+            let head = k * (m + 1);
+            sys.bins
+                .centers
+                .iter()
+                .filter(|d| d.dot(leaf.normal) > 0.0)
+                .map(|d| {
+                    let b = sys.bins.bin_of(crate::brdf::mirror(*d, leaf.normal));
+                    if lobe_bins[head + b] == ALL_BINS {
+                        m as u64
+                    } else {
+                        (lobe_bins[head + b + 1] - lobe_bins[head + b]) as u64
+                    }
+                })
+                .sum::<u64>()
+        })
+        .sum()
 }
 
 /// Storage buffers may not be empty: one unused record pads an empty list.

@@ -76,6 +76,18 @@ impl Layouts {
         kinds: &[vk::DescriptorType],
         push_bytes: u32,
     ) -> Result<Self> {
+        let stages = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
+        Self::with_stages(ctx, name, kinds, push_bytes, stages)
+    }
+
+    /// [`Layouts::with`] for the shader `stages` given (e.g. compute).
+    pub fn with_stages(
+        ctx: &Arc<Context>,
+        name: &str,
+        kinds: &[vk::DescriptorType],
+        push_bytes: u32,
+        stages: vk::ShaderStageFlags,
+    ) -> Result<Self> {
         let bindings: Vec<_> = kinds
             .iter()
             .enumerate()
@@ -84,7 +96,7 @@ impl Layouts {
                     .binding(b as u32)
                     .descriptor_type(kind)
                     .descriptor_count(1)
-                    .stage_flags(vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT)
+                    .stage_flags(stages)
             })
             .collect();
         let set = unsafe {
@@ -96,7 +108,7 @@ impl Layouts {
         .vk("creating the descriptor set layout")?;
         let set = Owned::new(ctx, set, &format!("{name} set layout"));
         let ranges = [vk::PushConstantRange::default()
-            .stage_flags(vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT)
+            .stage_flags(stages)
             .size(push_bytes)];
         let sets = [set.raw()];
         let pipeline = unsafe {
@@ -241,6 +253,31 @@ pub fn write_set(
 }
 
 const MAIN: &CStr = c"main";
+
+/// Builds a compute pipeline from the compute shader `file` under `glsl/`.
+pub fn create_compute(
+    ctx: &Arc<Context>,
+    layout: &Owned<vk::PipelineLayout>,
+    file: &str,
+) -> Result<Owned<vk::Pipeline>> {
+    let d = &ctx.device;
+    let code = spirv(file);
+    let module =
+        unsafe { d.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&code), None) }
+            .vk(file)?;
+    let module = Owned::new(ctx, module, file);
+    let stage = vk::PipelineShaderStageCreateInfo::default()
+        .stage(vk::ShaderStageFlags::COMPUTE)
+        .module(module.raw())
+        .name(MAIN);
+    let info = vk::ComputePipelineCreateInfo::default()
+        .stage(stage)
+        .layout(layout.raw());
+    let p = unsafe { d.create_compute_pipelines(ctx.pipeline_cache(), &[info], None) }
+        .map_err(|(_, e)| e)
+        .vk(file)?[0];
+    Ok(Owned::new(ctx, p, file))
+}
 
 /// Builds a graphics pipeline from `desc`.
 pub fn create(

@@ -6,7 +6,7 @@
 
 use super::context::Context;
 use super::handle::Owned;
-use super::layout::{as_bytes, binding, GpuLink, GpuMaterial, PullLine, QuadInstance};
+use super::layout::{as_bytes, binding, GpuCombo, GpuLink, GpuMaterial, QuadInstance, RowPair};
 use super::memory::{resource_set, Buffer, BufferDesc, Image, ImageDesc, MemoryReport, Purpose};
 use super::pack;
 use super::tables::{DrawData, TableLayout};
@@ -26,8 +26,10 @@ resource_set! {
         pub leaf_ex0,
         /// Leaves' I_ex, parity 1.
         pub leaf_ex1,
-        /// Clusters' I_ex (leaf rows zero), rebuilt by every pull.
+        /// Clusters' I_ex at even depths (leaf and odd rows zero), rebuilt by every pull.
         pub cluster_ex,
+        /// Clusters' I_ex at odd depths (pull writes one parity per level, reading the other).
+        pub cluster_ex_odd,
         /// Gathered incident radiance.
         pub l_in,
         /// Pushed incident radiance.
@@ -76,20 +78,26 @@ resource_set! {
     pub struct SolverBuffers {
         /// Links (global).
         pub links,
-        /// Push quads.
-        pub push_quads,
+        /// What links share: central bin, filter layer, runs (global).
+        pub combos,
+        /// Receiver bin runs (global).
+        pub runs,
+        /// Push lines, by depth.
+        pub push,
         /// Diffuse leaf runs.
         pub diffuse_quads,
         /// Glossy leaf runs.
         pub glossy_quads,
         /// All leaf runs (irradiance).
         pub leaf_quads,
-        /// Pull lines.
-        pub pull_lines,
+        /// Pull lines, by depth.
+        pub pull,
         /// Materials.
         pub materials,
         /// Bin centers.
         pub bin_centers,
+        /// Incident bins of each glossy lobe's truncated cone, per mirror bin.
+        pub lobe_bins,
     }
 }
 
@@ -128,7 +136,20 @@ impl SolverImages<ImageDesc> {
         Self {
             leaf_ex0: table("I_ex leaves (ping)"),
             leaf_ex1: table("I_ex leaves (pong)"),
-            cluster_ex: img("I_ex clusters", tw, th, CLUSTER_FORMAT, Purpose::Tables),
+            cluster_ex: img(
+                "I_ex clusters (even)",
+                tw,
+                th,
+                CLUSTER_FORMAT,
+                Purpose::Tables,
+            ),
+            cluster_ex_odd: img(
+                "I_ex clusters (odd)",
+                tw,
+                th,
+                CLUSTER_FORMAT,
+                Purpose::Tables,
+            ),
             l_in: img("L_in", tw, th, accum_format, Purpose::Tables),
             l_push: img("L_in pushed", tw, th, accum_format, Purpose::Tables),
             i_total: table("I_total"),
@@ -166,21 +187,30 @@ impl SolverImages<ImageDesc> {
 }
 
 impl SolverBuffers<BufferDesc> {
-    /// The buffers holding `draw`, `materials` material records and `bins` bin centers.
-    pub fn describe(draw: &DrawData, materials: usize, bins: usize) -> Self {
+    /// The buffers holding `draw`, `materials` material records, `bins` bin centers and
+    /// `lobe_bins` words of lobe neighbourhoods.
+    pub fn describe(draw: &DrawData, materials: usize, bins: usize, lobe_bins: usize) -> Self {
         let vb = vk::BufferUsageFlags::VERTEX_BUFFER;
         let sb = vk::BufferUsageFlags::STORAGE_BUFFER;
         let prim = Purpose::PushPullPrimitives;
         let quads = |name: &str, q: &[QuadInstance]| {
             BufferDesc::of::<QuadInstance>(name, q.len(), vb, prim)
         };
+        let rows = |name: &str, r: &[RowPair]| BufferDesc::of::<RowPair>(name, r.len(), vb, prim);
         Self {
             links: BufferDesc::of::<GpuLink>("links", draw.links.len(), vb, Purpose::Links),
-            push_quads: quads("push quads", &draw.push_quads),
+            combos: BufferDesc::of::<GpuCombo>(
+                "link combos",
+                draw.combos.len().max(1),
+                sb,
+                Purpose::Links,
+            ),
+            runs: BufferDesc::of::<u32>("link runs", draw.runs.len().max(1), sb, Purpose::Links),
+            push: rows("push lines", &draw.push),
             diffuse_quads: quads("local quads (diffuse)", &draw.diffuse_quads),
             glossy_quads: quads("local quads (glossy)", &draw.glossy_quads),
             leaf_quads: quads("local quads (irradiance)", &draw.leaf_quads),
-            pull_lines: BufferDesc::of::<PullLine>("pull lines", draw.pull_lines.len(), vb, prim),
+            pull: rows("pull lines", &draw.pull),
             materials: BufferDesc::of::<GpuMaterial>(
                 "materials",
                 materials,
@@ -190,6 +220,12 @@ impl SolverBuffers<BufferDesc> {
             bin_centers: BufferDesc::of::<[f32; 4]>(
                 "bin centers",
                 bins,
+                sb,
+                Purpose::ElementAttributes,
+            ),
+            lobe_bins: BufferDesc::of::<u32>(
+                "lobe bins",
+                lobe_bins.max(1),
                 sb,
                 Purpose::ElementAttributes,
             ),
@@ -209,6 +245,8 @@ pub struct ResourcePlan {
     pub accum_format: vk::Format,
     /// Draw records (counts are needed when recording).
     pub draw: DrawData,
+    /// Incident bins of the glossy lobes' cones ([`super::pack::lobe_bins`]).
+    pub lobe_bins: Vec<u32>,
     /// Image descriptions.
     pub images: SolverImages<ImageDesc>,
     /// Buffer descriptions.
@@ -232,12 +270,18 @@ impl ResourcePlan {
             sys.bins.count as u32,
             max_image_dimension,
             column_height,
-        )?;
+        )?
+        .with_grid(sys.bins.nv as u32);
         let format = table_format(precision);
-        let draw = DrawData::new(sys, &layout, features.glossy_everywhere);
+        let draw = DrawData::new(sys, &layout, features.glossy_everywhere)?;
         let glossy_tables =
             features.glossy && (!sys.lobe_norm.is_empty() || features.glossy_everywhere);
         let layers = sys.filters.used_classes().len() as u32;
+        let lobe_bins = if features.glossy {
+            super::pack::lobe_bins(sys)
+        } else {
+            Vec::new()
+        };
         Ok(Self {
             images: SolverImages::describe(
                 &layout,
@@ -247,7 +291,13 @@ impl ResourcePlan {
                 glossy_tables,
                 layers,
             ),
-            buffers: SolverBuffers::describe(&draw, sys.materials.len(), sys.bins.count),
+            buffers: SolverBuffers::describe(
+                &draw,
+                sys.materials.len(),
+                sys.bins.count,
+                lobe_bins.len(),
+            ),
+            lobe_bins,
             layout,
             format,
             accum_format,
@@ -322,15 +372,23 @@ impl Resources {
         let b = &plan.buffers;
         let materials = pack::solver_materials(sys);
         let centers = super::layout::bin_centers(&sys.bins);
+        // Storage buffers may not be empty.
+        let combos = super::pack::padded(draw.combos.clone());
+        let runs = super::pack::padded(draw.runs.clone());
         let buffers = SolverBuffers {
             links: b.links.upload(ctx, as_bytes(&draw.links))?,
-            push_quads: b.push_quads.upload(ctx, as_bytes(&draw.push_quads))?,
+            combos: b.combos.upload(ctx, as_bytes(&combos))?,
+            runs: b.runs.upload(ctx, as_bytes(&runs))?,
+            push: b.push.upload(ctx, as_bytes(&draw.push))?,
             diffuse_quads: b.diffuse_quads.upload(ctx, as_bytes(&draw.diffuse_quads))?,
             glossy_quads: b.glossy_quads.upload(ctx, as_bytes(&draw.glossy_quads))?,
             leaf_quads: b.leaf_quads.upload(ctx, as_bytes(&draw.leaf_quads))?,
-            pull_lines: b.pull_lines.upload(ctx, as_bytes(&draw.pull_lines))?,
+            pull: b.pull.upload(ctx, as_bytes(&draw.pull))?,
             materials: b.materials.upload(ctx, as_bytes(&materials))?,
             bin_centers: b.bin_centers.upload(ctx, as_bytes(&centers))?,
+            lobe_bins: b
+                .lobe_bins
+                .upload(ctx, as_bytes(&super::pack::padded(plan.lobe_bins.clone())))?,
         };
         let sampler = super::pipelines::texel_sampler(ctx, "texelFetch sampler")?;
         let kinds = super::pipelines::descriptor_kinds(binding::COUNT, &binding::BUFFERS);
@@ -370,6 +428,7 @@ impl Resources {
             match b {
                 binding::LEAF_EX => im.leaf_ex(p),
                 binding::CLUSTER_EX => &im.cluster_ex,
+                binding::CLUSTER_EX_ODD => &im.cluster_ex_odd,
                 binding::FILTER => &im.filter,
                 binding::L_IN => &im.l_in,
                 binding::L_PUSH => &im.l_push,
@@ -386,9 +445,13 @@ impl Resources {
             .filter(|b| !binding::BUFFERS.contains(b))
             .map(|b| (b, image_of(b).view))
             .collect();
+        let b = &self.buffers;
         let buffers = [
-            (binding::MATERIALS, self.buffers.materials.raw),
-            (binding::BIN_CENTERS, self.buffers.bin_centers.raw),
+            (binding::MATERIALS, b.materials.raw),
+            (binding::BIN_CENTERS, b.bin_centers.raw),
+            (binding::COMBOS, b.combos.raw),
+            (binding::RUNS, b.runs.raw),
+            (binding::LOBE_BINS, b.lobe_bins.raw),
         ];
         super::pipelines::write_set(ctx, self.sets[p], self.sampler.raw(), &images, &buffers);
     }

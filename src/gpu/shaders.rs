@@ -28,7 +28,7 @@ mod tests {
         let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("glsl");
         for e in std::fs::read_dir(dir).unwrap() {
             let name = e.unwrap().file_name().to_string_lossy().into_owned();
-            if name.ends_with(".vert") || name.ends_with(".frag") {
+            if name.ends_with(".vert") || name.ends_with(".frag") || name.ends_with(".comp") {
                 let words = spirv(&name);
                 assert_eq!(words[0], 0x0723_0203, "{name}: SPIR-V magic");
             }

@@ -9,11 +9,13 @@ use super::pack::{decode, encode};
 use super::passes::{self, Pass, PipelineSpec, SolverPipelines};
 use super::pipelines::Layouts;
 use super::profiler::Profiler;
+use super::reduce::{Reducer, Start};
 use super::resources::{ResourcePlan, Resources, SolverImages};
 use crate::error::{Error, Result};
 use crate::plan::range::Range;
 use crate::plan::Features;
 use crate::scene::{Precision, Scheme};
+use crate::solver::convergence::{Change, Figures};
 use crate::solver::{LocalMode, Table};
 use crate::system::System;
 use ash::vk;
@@ -91,6 +93,9 @@ pub struct GpuSolver {
     direct: Option<Table>,
     scale: f64,
     features: Features,
+    /// Whether each row's depth is odd (where push leaves its L_push).
+    depth_parity: Vec<bool>,
+    reducer: Reducer,
 }
 
 impl GpuSolver {
@@ -133,12 +138,14 @@ impl GpuSolver {
             features,
         })?;
         let profiler = Profiler::new(&ctx, 1024)?;
+        let reducer = Reducer::new(&ctx, &res)?;
         let layout = *res.layout();
         let constants = PassConstants {
             bins: layout.bins,
             rows_per_column: layout.rows_per_column,
             line_offset: ctx.info.line_mode.endpoint_offset(),
             omega: sys.bins.omega as f32,
+            grid_rows: layout.grid_rows,
             flags: if precision == Precision::F16 {
                 FLAG_HALF
             } else {
@@ -162,6 +169,13 @@ impl GpuSolver {
             direct: None,
             scale: 1.0,
             features,
+            depth_parity: sys
+                .hierarchy
+                .nodes
+                .iter()
+                .map(|n| n.depth % 2 == 1)
+                .collect(),
+            reducer,
         })
         .and_then(|mut s| {
             s.update_scale()?;
@@ -341,15 +355,18 @@ impl GpuSolver {
         } else {
             prof.begin(ctx, cmd, "initialize");
             let im = &mut res.images;
+            // Push leaves odd depths' incident light in L_in: both start at zero.
             for img in [
                 &mut im.cluster_ex,
+                &mut im.cluster_ex_odd,
                 &mut im.i_total,
                 &mut im.leaf_ex0,
                 &mut im.leaf_ex1,
+                &mut im.l_in,
+                &mut im.l_push,
             ] {
                 passes::clear(&p, img);
             }
-            passes::push::clear(&p, res);
             prof.end(ctx, cmd);
         }
         prof.begin(ctx, cmd, "local");
@@ -408,7 +425,79 @@ impl GpuSolver {
 
     /// Submits one iteration and waits.
     pub fn iterate(&mut self, scheme: Scheme, antiradiance_steps: usize) -> Result<()> {
-        self.submit(|s, cmd| s.record_iteration(cmd, scheme, antiradiance_steps))
+        self.iterate_batch(scheme, antiradiance_steps, 1)
+            .map(|_| ())
+    }
+
+    /// Propagations in one iteration of `scheme` (the asymmetric scheme's antiradiance steps
+    /// run only where antiradiance is planned).
+    fn propagations(&self, scheme: Scheme, antiradiance_steps: usize) -> usize {
+        match scheme {
+            Scheme::Asymmetric if self.features.antiradiance => 1 + antiradiance_steps,
+            _ => 1,
+        }
+    }
+
+    /// Records `n` iterations, each followed by the reduction of its convergence figures into
+    /// slot `i` of the result buffer (read by [`GpuSolver::iterate_batch`]).
+    pub fn record_batch(
+        &mut self,
+        cmd: vk::CommandBuffer,
+        scheme: Scheme,
+        antiradiance_steps: usize,
+        n: usize,
+    ) -> Result<()> {
+        let several = self.propagations(scheme, antiradiance_steps) > 1;
+        for i in 0..n.min(super::reduce::MAX_BATCH) {
+            // Several propagations overwrite both ping-pong images: keep the start.
+            let start = if several {
+                self.reducer
+                    .record_snapshot(cmd, &mut self.res, self.parity)?;
+                Start::Snapshot
+            } else {
+                Start::PingPong
+            };
+            self.record_iteration(cmd, scheme, antiradiance_steps)?;
+            self.profiler.begin(&self.ctx, cmd, "reduce");
+            self.reducer
+                .record(cmd, &mut self.res, start, self.parity, i);
+            self.profiler.end(&self.ctx, cmd);
+        }
+        Ok(())
+    }
+
+    /// Submits `n` iterations (at most [`super::reduce::MAX_BATCH`]) at once and waits once;
+    /// returns each one's convergence figures, reduced on the device (unscaled).
+    pub fn iterate_batch(
+        &mut self,
+        scheme: Scheme,
+        antiradiance_steps: usize,
+        n: usize,
+    ) -> Result<Vec<Figures>> {
+        let n = n.min(super::reduce::MAX_BATCH);
+        self.submit(|s, cmd| s.record_batch(cmd, scheme, antiradiance_steps, n))?;
+        let inv = 1.0 / self.scale;
+        let omega = self.constants.omega as f64;
+        Ok(self
+            .reducer
+            .read(n)?
+            .into_iter()
+            .map(|r| {
+                let (diff, norm) = (r.diff2.sqrt(), r.norm2.sqrt());
+                Figures {
+                    change: Change {
+                        relative: if norm > 0.0 { diff / norm } else { diff * inv },
+                        absolute: diff * inv,
+                    },
+                    flux: r.flux * omega * inv,
+                    peak: if r.peak >= 3.0e38 {
+                        f64::INFINITY
+                    } else {
+                        r.peak * inv
+                    },
+                }
+            })
+            .collect())
     }
 
     /// Initializes and runs `iterations` iterations in one submission.
@@ -451,11 +540,20 @@ impl GpuSolver {
     pub fn read_i_ex(&mut self) -> Result<Table> {
         let p = self.parity;
         let leaf = self.read_texels(|im| im.leaf_ex_mut(p))?;
-        let cl = self.read_texels(|im| &mut im.cluster_ex)?;
+        let even = self.read_texels(|im| &mut im.cluster_ex)?;
+        let odd = self.read_texels(|im| &mut im.cluster_ex_odd)?;
+        // Each row is valid in one of the three images and zero in the others.
         let sum: Vec<[f32; 4]> = leaf
             .iter()
-            .zip(&cl)
-            .map(|(a, b)| [a[0] + b[0], a[1] + b[1], a[2] + b[2], 0.0])
+            .zip(even.iter().zip(&odd))
+            .map(|(a, (b, c))| {
+                [
+                    a[0] + b[0] + c[0],
+                    a[1] + b[1] + c[1],
+                    a[2] + b[2] + c[2],
+                    0.0,
+                ]
+            })
             .collect();
         Ok(self.unscale(self.res.layout().to_table(&sum)))
     }
@@ -466,10 +564,18 @@ impl GpuSolver {
         Ok(self.unscale(self.res.layout().to_table(&t)))
     }
 
-    /// Reads the pushed incident radiance back.
+    /// Reads the pushed incident radiance back (push leaves odd depths' rows in the L_in image).
     pub fn read_l_push(&mut self) -> Result<Table> {
-        let t = self.read_texels(|im| &mut im.l_push)?;
-        Ok(self.unscale(self.res.layout().to_table(&t)))
+        let layout = *self.res.layout();
+        let even = layout.to_table(&self.read_texels(|im| &mut im.l_push)?);
+        let odd = layout.to_table(&self.read_texels(|im| &mut im.l_in)?);
+        let mut t = even;
+        for (r, node) in self.depth_parity.iter().enumerate() {
+            if *node {
+                t.row_mut(r).copy_from_slice(odd.row(r));
+            }
+        }
+        Ok(self.unscale(t))
     }
 
     fn unscale(&self, mut t: Table) -> Table {
@@ -514,13 +620,9 @@ impl GpuSolver {
         let leaves: u64 = d.leaf_quads.iter().map(|q| (q.end - q.first) as u64).sum();
         Fragments {
             global: d.global_fragments,
-            push: d
-                .push_quads
-                .iter()
-                .map(|q| (q.end - q.first) as u64 * m)
-                .sum(),
+            push: d.push.len() as u64 * m,
             local: leaves * (m + 1),
-            pull: d.pull_lines.len() as u64 * m,
+            pull: d.pull.len() as u64 * m,
         }
     }
 

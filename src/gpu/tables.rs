@@ -1,13 +1,19 @@
 //! The table layout of §4.1 and the per-instance data the passes draw: one row per hierarchy
 //! node, one texel per bin, rows split into column blocks to respect maxImageDimension2D.
 
-use super::layout::{GpuLink, PullLine, QuadInstance};
+use super::layout::{
+    pack_run, GpuCombo, GpuLink, QuadInstance, RowPair, LINK_MAX_COMBOS, LINK_MAX_ROWS, MAX_RUNS,
+};
 use crate::error::{Error, Result};
 use crate::solver::Table;
 use crate::system::System;
 use glam::DVec3;
 
-/// Where rows and bins live in the table images.
+/// Where rows and bins live in the table images. Within a row, bins are stored column by column
+/// of their `nu × nv` grid (position `iu·nv + iv` for bin `iv·nu + iu`): the grid's cells are up
+/// to twice as tall as wide on the octahedral square, so a filter's round footprint covers
+/// about half as many grid columns as grid rows, and the global pass draws one line per
+/// consecutive run of positions.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct TableLayout {
     /// Rows (hierarchy nodes).
@@ -18,6 +24,8 @@ pub struct TableLayout {
     pub rows_per_column: u32,
     /// Column blocks.
     pub columns: u32,
+    /// Rows `nv` of the bins' grid (1: positions are bin indices).
+    pub grid_rows: u32,
 }
 
 impl TableLayout {
@@ -50,7 +58,37 @@ impl TableLayout {
             bins,
             rows_per_column,
             columns,
+            grid_rows: 1,
         })
+    }
+
+    /// The same layout with bins stored column by column of a grid of `nv` rows.
+    pub fn with_grid(self, nv: u32) -> Self {
+        debug_assert!(nv >= 1 && self.bins % nv == 0);
+        Self {
+            grid_rows: nv,
+            ..self
+        }
+    }
+
+    /// Position of `bin` within its row (`ar_position` in common.glsl).
+    pub fn position(&self, bin: u32) -> u32 {
+        let (nv, nu) = (self.grid_rows, self.bins / self.grid_rows);
+        (bin % nu) * nv + bin / nu
+    }
+
+    /// The bin stored at `position` of a row (`ar_bin_at` in common.glsl).
+    pub fn bin_at(&self, position: u32) -> u32 {
+        let (nv, nu) = (self.grid_rows, self.bins / self.grid_rows);
+        (position % nv) * nu + position / nv
+    }
+
+    /// Texel of `(row, position within the row)`.
+    pub fn position_texel(&self, row: u32, position: u32) -> (u32, u32) {
+        (
+            (row / self.rows_per_column) * self.bins + position,
+            row % self.rows_per_column,
+        )
     }
 
     /// Table image width, texels.
@@ -60,10 +98,7 @@ impl TableLayout {
 
     /// Texel of `(row, bin)`.
     pub fn texel(&self, row: u32, bin: u32) -> (u32, u32) {
-        (
-            (row / self.rows_per_column) * self.bins + bin,
-            row % self.rows_per_column,
-        )
+        self.position_texel(row, self.position(bin))
     }
 
     /// Texel of a row in the per-row images (attributes, irradiance).
@@ -118,79 +153,119 @@ impl TableLayout {
 /// Everything the passes draw, built once from the [`System`].
 #[derive(Debug, Clone, Default)]
 pub struct DrawData {
-    /// One per link (global pass).
+    /// One per link (global), ordered by run count: the links of `link_buckets[k]` have
+    /// `k`+1 runs and are drawn with `2(k+1)` vertices each.
     pub links: Vec<GpuLink>,
-    /// Fragments the global pass draws (sum of spans).
+    /// `(runs, first link, link count)` of each draw of the global pass.
+    pub link_buckets: Vec<(u32, u32, u32)>,
+    /// What links with the same central bin, filter layer and receiver runs share.
+    pub combos: Vec<GpuCombo>,
+    /// Receiver bin runs of the combos ([`pack_run`]).
+    pub runs: Vec<u32>,
+    /// Fragments the global pass draws (Σ run lengths over links), all of them blended.
     pub global_fragments: u64,
+    /// Lines the global pass draws (Σ runs over links).
+    pub global_lines: u64,
     /// Filter-table layer of each cone class (`u16::MAX` when unused).
     pub class_layer: Vec<u16>,
-    /// One quad per (receiving node, column block) of its subtree (push pass).
-    pub push_quads: Vec<QuadInstance>,
+    /// Push, top-down: every node with its parent (`u32::MAX` for the root), by depth.
+    pub push: Vec<RowPair>,
+    /// `push[push_levels[d]]` are the nodes at depth `d`.
+    pub push_levels: Vec<std::ops::Range<u32>>,
+    /// Pull, bottom-up: every cluster with its right child (the left one is the next row),
+    /// deepest clusters first.
+    pub pull: Vec<RowPair>,
+    /// `(range of pull, depth)` per level, deepest first.
+    pub pull_levels: Vec<(std::ops::Range<u32>, u32)>,
     /// Runs of Lambertian leaf rows (local pass, diffuse fast path).
     pub diffuse_quads: Vec<QuadInstance>,
     /// Runs of glossy leaf rows (local pass, Phong sum).
     pub glossy_quads: Vec<QuadInstance>,
     /// Runs of all leaf rows (irradiance step).
     pub leaf_quads: Vec<QuadInstance>,
-    /// One per (leaf, ancestor) pair (pull pass).
-    pub pull_lines: Vec<PullLine>,
+}
+
+/// Maximal runs `[first, end)` of consecutive positions (in `layout`) of the bins of a filter
+/// row (`(bin, weight)`) that `keep` accepts.
+pub fn bin_runs(
+    layout: &TableLayout,
+    row: &[(u32, f32)],
+    keep: impl Fn(u32) -> bool,
+) -> Vec<(u32, u32)> {
+    let gap: u32 = std::env::var("AR_GAP")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0);
+    let mut positions: Vec<u32> = row
+        .iter()
+        .filter(|e| keep(e.0))
+        .map(|e| layout.position(e.0))
+        .collect();
+    positions.sort_unstable();
+    let mut runs: Vec<(u32, u32)> = Vec::new();
+    for p in positions {
+        match runs.last_mut() {
+            Some(r) if r.1 + gap >= p => r.1 = p + 1,
+            _ => runs.push((p, p + 1)),
+        }
+    }
+    runs
 }
 
 impl DrawData {
     /// Builds the draw data of `sys` in `layout`.
     /// `glossy_everywhere` sends every leaf through the general BRDF pass (`--all-passes`).
-    pub fn new(sys: &System, layout: &TableLayout, glossy_everywhere: bool) -> Self {
+    pub fn new(sys: &System, layout: &TableLayout, glossy_everywhere: bool) -> Result<Self> {
+        if sys.rows() as u64 > LINK_MAX_ROWS as u64 {
+            return Err(Error::TooLarge {
+                what: format!(
+                    "GPU link records for {} nodes (they address at most {LINK_MAX_ROWS} rows; solver.element_size)",
+                    sys.rows()
+                ),
+                needed_bytes: sys.rows() as u64 * 12,
+                limit_bytes: LINK_MAX_ROWS as u64 * 12,
+            });
+        }
         let classes = sys.filters.rows.len();
         let mut class_layer = vec![u16::MAX; classes];
         for (layer, c) in sys.filters.used_classes().into_iter().enumerate() {
             class_layer[c] = layer as u16;
         }
-        // Bin span of every (class, central bin) filter row: the line covers only those texels.
-        let spans: Vec<Vec<u32>> = sys
-            .filters
-            .rows
-            .iter()
-            .map(|rows| {
-                rows.iter()
-                    .map(|row| {
-                        let lo = row.iter().map(|e| e.0).min().unwrap_or(0);
-                        let hi = row.iter().map(|e| e.0 + 1).max().unwrap_or(0);
-                        lo | (hi << 16)
-                    })
-                    .collect()
-            })
-            .collect();
-        let mut global_fragments = 0u64;
-        let links: Vec<GpuLink> = sys
-            .links
-            .links
-            .iter()
-            .map(|l| {
-                let span = spans[l.cone as usize][l.receiver_bin as usize];
-                global_fragments += ((span >> 16) - (span & 0xffff)) as u64;
-                GpuLink {
-                    receiver: l.receiver,
-                    sender: l.sender,
-                    bin_layer: l.sender_bin as u32 | ((class_layer[l.cone as usize] as u32) << 16),
-                    span,
-                    form_factor: l.form_factor as f32,
-                }
-            })
-            .collect();
+        let (links, link_buckets, combos, runs, global_fragments, global_lines) =
+            Self::links(sys, layout, &class_layer)?;
         let h = &sys.hierarchy;
-        let mut push_quads = Vec::new();
-        for r in 0..sys.rows() as u32 {
-            if sys.links.offsets[r as usize + 1] > sys.links.offsets[r as usize] {
-                for (a, b) in layout.split(r, h.nodes[r as usize].end) {
-                    push_quads.push(QuadInstance {
-                        source: r,
-                        first: a,
-                        end: b,
-                    });
-                }
+        let depth = h.max_depth() as usize;
+        let mut push_by_depth: Vec<Vec<RowPair>> = vec![Vec::new(); depth + 1];
+        let mut pull_by_depth: Vec<Vec<RowPair>> = vec![Vec::new(); depth + 1];
+        for (r, node) in h.nodes.iter().enumerate() {
+            let r = r as u32;
+            push_by_depth[node.depth as usize].push(RowPair {
+                row: r,
+                other: node.parent,
+            });
+            if let Some([_, right]) = h.children(r) {
+                pull_by_depth[node.depth as usize].push(RowPair {
+                    row: r,
+                    other: right,
+                });
             }
         }
-        let runs = |pred: &dyn Fn(u32) -> bool| {
+        let (mut push, mut push_levels) = (Vec::new(), Vec::new());
+        for level in push_by_depth {
+            let start = push.len() as u32;
+            push.extend(level);
+            push_levels.push(start..push.len() as u32);
+        }
+        let (mut pull, mut pull_levels) = (Vec::new(), Vec::new());
+        for (d, level) in pull_by_depth.into_iter().enumerate().rev() {
+            if level.is_empty() {
+                continue;
+            }
+            let start = pull.len() as u32;
+            pull.extend(level);
+            pull_levels.push((start..pull.len() as u32, d as u32));
+        }
+        let runs_of = |pred: &dyn Fn(u32) -> bool| {
             let mut out = Vec::new();
             let mut start = None;
             for r in 0..=sys.rows() as u32 {
@@ -218,27 +293,117 @@ impl DrawData {
                 && (glossy_everywhere
                     || sys.materials[sys.leaves[slot as usize].material as usize].is_glossy())
         };
-        let diffuse_quads = runs(&|r| sys.leaf_slot[r as usize] != u32::MAX && !glossy_leaf(r));
-        let glossy_quads = runs(&glossy_leaf);
-        let leaf_quads = runs(&|r| sys.leaf_slot[r as usize] != u32::MAX);
-        let mut pull_lines = Vec::new();
-        for &leaf in &h.leaves {
-            let mut a = h.nodes[leaf as usize].parent;
-            while a != u32::MAX {
-                pull_lines.push(PullLine { leaf, ancestor: a });
-                a = h.nodes[a as usize].parent;
-            }
-        }
-        Self {
+        let diffuse_quads = runs_of(&|r| sys.leaf_slot[r as usize] != u32::MAX && !glossy_leaf(r));
+        let glossy_quads = runs_of(&glossy_leaf);
+        let leaf_quads = runs_of(&|r| sys.leaf_slot[r as usize] != u32::MAX);
+        Ok(Self {
             links,
+            link_buckets,
+            combos,
+            runs,
             global_fragments,
+            global_lines,
             class_layer,
-            push_quads,
+            push,
+            push_levels,
+            pull,
+            pull_levels,
             diffuse_quads,
             glossy_quads,
             leaf_quads,
-            pull_lines,
+        })
+    }
+
+    /// Link records, their draw buckets, combos and runs, and the fragment and line counts.
+    #[allow(clippy::type_complexity)]
+    fn links(
+        sys: &System,
+        layout: &TableLayout,
+        class_layer: &[u16],
+    ) -> Result<(
+        Vec<GpuLink>,
+        Vec<(u32, u32, u32)>,
+        Vec<GpuCombo>,
+        Vec<u32>,
+        u64,
+        u64,
+    )> {
+        use std::collections::HashMap;
+        let mut combo_of: HashMap<(u16, u16, Vec<(u32, u32)>), u32> = HashMap::new();
+        let (mut combos, mut runs) = (Vec::new(), Vec::new());
+        let (mut fragments, mut lines) = (0u64, 0u64);
+        // Every link's combo and run count (links into the same receiver share its mask, and
+        // usually their (bin, class) too, so the runs of a receiver are cached per (bin, class)).
+        let mut per_link: Vec<(u32, u32)> = Vec::with_capacity(sys.links.links.len());
+        let mut cache: HashMap<(u16, u8), (u32, u32)> = HashMap::new();
+        let mut cache_row = u32::MAX;
+        for l in &sys.links.links {
+            if l.receiver != cache_row {
+                cache.clear();
+                cache_row = l.receiver;
+            }
+            let key = (l.receiver_bin, l.cone);
+            let entry = if let Some(e) = cache.get(&key) {
+                *e
+            } else {
+                let row = sys
+                    .filters
+                    .row(l.cone, l.receiver_bin as u32)
+                    .expect("table of a used cone class");
+                let r = bin_runs(layout, row, |j| sys.reads(l.receiver, j as usize));
+                let layer = class_layer[l.cone as usize];
+                let count = r.len() as u32;
+                if count > MAX_RUNS {
+                    return Err(Error::Invalid(format!(
+                        "a link covers {count} runs of receiver bins, more than {MAX_RUNS}"
+                    )));
+                }
+                let len: u32 = r.iter().map(|(a, b)| b - a).sum();
+                let next = combos.len() as u32;
+                let id = *combo_of
+                    .entry((l.receiver_bin, layer, r.clone()))
+                    .or_insert_with(|| {
+                        combos.push(GpuCombo {
+                            bin_layer: l.receiver_bin as u32 | (layer as u32) << 16,
+                            runs: runs.len() as u32 | count << 24,
+                        });
+                        runs.extend(r.iter().map(|&(a, b)| pack_run(a, b)));
+                        next
+                    });
+                let e = (id, count | len << 8);
+                cache.insert(key, e);
+                e
+            };
+            fragments += (entry.1 >> 8) as u64;
+            lines += (entry.1 & 0xff) as u64;
+            per_link.push(entry);
         }
+        if combos.len() as u64 > LINK_MAX_COMBOS as u64 || runs.len() >= 1 << 24 {
+            return Err(Error::Invalid(format!(
+                "{} link combos and {} runs exceed what a link record addresses ({LINK_MAX_COMBOS} combos, 2^24 runs)",
+                combos.len(),
+                runs.len()
+            )));
+        }
+        // Order the records by run count: one draw per count, `2·runs` vertices per link.
+        let mut order: Vec<u32> = (0..per_link.len() as u32).collect();
+        order.sort_by_key(|&i| per_link[i as usize].1 & 0xff);
+        let mut buckets: Vec<(u32, u32, u32)> = Vec::new();
+        let links: Vec<GpuLink> = order
+            .iter()
+            .enumerate()
+            .map(|(k, &i)| {
+                let l = &sys.links.links[i as usize];
+                let (combo, count) = (per_link[i as usize].0, per_link[i as usize].1 & 0xff);
+                match buckets.last_mut() {
+                    Some(b) if b.0 == count => b.2 += 1,
+                    _ => buckets.push((count, k as u32, 1)),
+                }
+                GpuLink::new(l.receiver, l.sender, combo, l.form_factor as f32)
+            })
+            .collect();
+        buckets.retain(|b| b.0 > 0);
+        Ok((links, buckets, combos, runs, fragments, lines))
     }
 }
 

@@ -16,6 +16,42 @@ pub struct Change {
     pub absolute: f64,
 }
 
+/// What one iteration did, measured where the tables live (the CPU's tables, or a reduction on
+/// the GPU): its change, the exitant flux after it and the largest |I_ex| (infinite when a value
+/// is not finite).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Figures {
+    /// How I_ex changed on the leaves.
+    pub change: Change,
+    /// Flux leaving the leaves' front bins ([`exitant_flux`]).
+    pub flux: f64,
+    /// Largest |I_ex| on the leaves (the rows stored in the table format; clusters are
+    /// float32 everywhere).
+    pub peak: f64,
+}
+
+impl Figures {
+    /// The figures of an iteration from `before` to `after` (the CPU's definition).
+    pub fn between(sys: &System, before: &Table, after: &Table) -> Self {
+        let peak = sys
+            .leaves
+            .iter()
+            .flat_map(|l| after.row(l.node as usize))
+            .fold(0.0, |m: f64, v| {
+                if v.is_finite() {
+                    m.max(v.abs().max_element())
+                } else {
+                    f64::INFINITY
+                }
+            });
+        Self {
+            change: change(sys, before, after),
+            flux: exitant_flux(sys, after),
+            peak,
+        }
+    }
+}
+
 /// The change between two I_ex tables over the leaves' rows.
 pub fn change(sys: &System, before: &Table, after: &Table) -> Change {
     let (mut diff, mut norm) = (0.0, 0.0);

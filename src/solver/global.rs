@@ -1,6 +1,7 @@
 //! Global pass (eq. 16): every link adds `F · I_ex(sender, sender_bin)` to the receiver's
-//! incident radiance, spread over bins by its cone class's table (every link is filtered).
-//! Parallel over receivers.
+//! incident radiance, spread over bins by its cone class's table (every link is filtered), in
+//! the bins the receiver reads ([`System::reads`]: a leaf ignores light from behind). Parallel
+//! over receivers. The GPU draws exactly these bins, as runs of consecutive texels.
 
 use super::Table;
 use crate::system::System;
@@ -24,7 +25,9 @@ pub fn global(sys: &System, i_ex: &Table, l_in: &mut Table) {
                     .row(l.cone, l.receiver_bin as u32)
                     .expect("table of a used cone class");
                 for &(j, w) in spread {
-                    row[j as usize] += v * w as f64;
+                    if sys.reads(r as u32, j as usize) {
+                        row[j as usize] += v * w as f64;
+                    }
                 }
             }
         });

@@ -55,7 +55,7 @@ pub fn local(s: &mut CpuSolver<'_>, mode: LocalMode) {
                         .iter()
                         .map(|&(l, _)| mirror(sys.bins.centers[l], n))
                         .collect();
-                    (lobe.exponent, f, mirrored)
+                    (lobe, f, mirrored)
                 });
             for (j, dir) in sys.bins.centers.iter().enumerate() {
                 let cj = dir.dot(n);
@@ -65,9 +65,14 @@ pub fn local(s: &mut CpuSolver<'_>, mode: LocalMode) {
                     }
                     let base = a * c * cj;
                     let (mut r_t, mut r_d) = (mat.kd / PI * e_t, mat.kd / PI * e_d);
-                    if let Some((exponent, factors, mirrored)) = &lobe {
+                    if let Some((lobe, factors, mirrored)) = &lobe {
                         for (&(l, wt), r) in incoming.iter().zip(mirrored) {
-                            let shape = lobe_shape(*exponent, r.dot(*dir));
+                            // The truncated lobe (brdf::LOBE_CUTOFF), as the GPU sums it.
+                            let cos_alpha = r.dot(*dir);
+                            if !lobe.keeps(cos_alpha) {
+                                continue;
+                            }
+                            let shape = lobe_shape(lobe.exponent, cos_alpha);
                             let f = mat.ks * (shape * factors[l] as f64 * wt);
                             r_t += f * lt(l);
                             r_d += f * ld(l);

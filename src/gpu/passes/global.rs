@@ -1,50 +1,37 @@
-//! Global pass (eq. 16, §4.2): every link is one line primitive across its receiver's bins in
-//! L_in; the fragment shader multiplies the sender's I_ex by the form factor and the cone-filter
-//! weight, and additive blending sums all links of a receiver.
+//! Global pass (eq. 16, §4.2): every link is drawn as line primitives — one per run of receiver
+//! bins its cone filter reaches and the receiver reads — into the receiver's row of L_in; the
+//! sender's I_ex times the form factor is fetched once per line, the fragment shader weights it
+//! by the filter table, and additive blending sums all links of a receiver. Links are drawn in
+//! one draw per run count (`DrawData::link_buckets`).
 
 use super::{begin_rendering, end_rendering, Load, Pass, PipelineSpec};
 use crate::error::Result;
 use crate::gpu::barrier::{transition, Access};
 use crate::gpu::handle::Owned;
 use crate::gpu::layout::GpuLink;
-use crate::gpu::pipelines::{create, PipelineDesc, Target};
+use crate::gpu::pipelines::{create, PipelineDesc};
 use crate::gpu::resources::Resources;
 use ash::vk;
 
-/// The line pipeline of link records with fragment shader `frag` into `targets` (the global
-/// pass, and the diagnostics that check which texels a line covers).
-pub fn desc<'a>(frag: &'a str, targets: &'a [Target]) -> PipelineDesc<'a> {
-    PipelineDesc {
-        name: if frag == "global.frag" {
-            "global"
-        } else {
-            frag
-        },
+/// The global pass's pipeline: link records as instances, additive into L_in.
+pub fn pipeline(spec: &PipelineSpec<'_>) -> Result<Owned<vk::Pipeline>> {
+    let targets = [spec.accumulate()];
+    let desc = PipelineDesc {
+        name: "global",
         vert: "global.vert",
-        frag,
+        frag: "global.frag",
         topology: vk::PrimitiveTopology::LINE_LIST,
         stride: std::mem::size_of::<GpuLink>() as u32,
-        attributes: &[
-            (vk::Format::R32G32B32A32_UINT, 0),
-            (vk::Format::R32_SFLOAT, 16),
-        ],
-        targets,
+        attributes: &[(vk::Format::R32G32_UINT, 0), (vk::Format::R32_SFLOAT, 8)],
+        targets: &targets,
         specialization: &[],
         per_vertex: false,
         depth: false,
-    }
+    };
+    create(spec.ctx, spec.layout, &desc)
 }
 
-/// The global pass's pipeline: additive into L_in.
-pub fn pipeline(spec: &PipelineSpec<'_>) -> Result<Owned<vk::Pipeline>> {
-    create(
-        spec.ctx,
-        spec.layout,
-        &desc("global.frag", &[spec.accumulate()]),
-    )
-}
-
-/// Records the global pass reading `leaf_ex(cur)` and the cluster image.
+/// Records the global pass reading `leaf_ex(cur)` and both cluster images.
 pub fn record(p: &Pass<'_>, res: &mut Resources, cur: usize) {
     let im = &mut res.images;
     let leaf = if cur == 0 {
@@ -58,12 +45,15 @@ pub fn record(p: &Pass<'_>, res: &mut Resources, cur: usize) {
         &mut [
             (leaf, Access::Sampled),
             (&mut im.cluster_ex, Access::Sampled),
+            (&mut im.cluster_ex_odd, Access::Sampled),
             (&mut im.filter, Access::Sampled),
             (&mut im.l_in, Access::Attachment),
         ],
     );
     begin_rendering(p.ctx, p.cmd, &[(&im.l_in, Load::Clear)]);
     p.bind(&p.pipes.global, im.l_in.extent, res.plan.layout.bins);
-    p.draw(res.buffers.links.raw, 2, res.plan.draw.links.len());
+    for &(runs, first, count) in &res.plan.draw.link_buckets {
+        p.draw_range(res.buffers.links.raw, 2 * runs, first, count);
+    }
     end_rendering(p.ctx, p.cmd);
 }

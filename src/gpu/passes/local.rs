@@ -60,6 +60,7 @@ pub fn record(p: &Pass<'_>, res: &mut Resources, cur: usize, m: u32) {
         p.cmd,
         &mut [
             (&mut im.l_push, Access::Sampled),
+            (&mut im.l_in, Access::Sampled),
             (&mut im.attr_normal_area, Access::Sampled),
             (&mut im.attr_leaf, Access::Sampled),
             (&mut im.direct, Access::Sampled),

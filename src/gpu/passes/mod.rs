@@ -95,16 +95,16 @@ pub enum Load {
 pub struct SolverPipelines {
     /// Global lines, additive into L_in.
     pub global: Owned<vk::Pipeline>,
-    /// Push quads, additive into L_push.
-    pub push: Owned<vk::Pipeline>,
+    /// Push lines: even depths into L_push, odd depths added onto L_in.
+    pub push: [Owned<vk::Pipeline>; 2],
     /// Irradiance quads (one texel per row).
     pub irradiance: Owned<vk::Pipeline>,
     /// Local pass, Lambertian runs, by mode.
     pub diffuse: [Option<Owned<vk::Pipeline>>; 3],
     /// Local pass, glossy runs, by mode.
     pub glossy: [Option<Owned<vk::Pipeline>>; 3],
-    /// Pull lines, additive into the cluster image.
-    pub pull: Owned<vk::Pipeline>,
+    /// Pull lines: into even-depth clusters, into odd-depth clusters.
+    pub pull: [Owned<vk::Pipeline>; 2],
 }
 
 impl SolverPipelines {
@@ -113,11 +113,11 @@ impl SolverPipelines {
     pub fn new(spec: &PipelineSpec<'_>) -> Result<Self> {
         Ok(Self {
             global: global::pipeline(spec)?,
-            push: push::pipeline(spec)?,
+            push: push::pipelines(spec)?,
             irradiance: local::irradiance_pipeline(spec)?,
             diffuse: [None, None, None],
             glossy: [None, None, None],
-            pull: pull::pipeline(spec)?,
+            pull: pull::pipelines(spec)?,
         })
     }
 
@@ -297,7 +297,13 @@ impl Pass<'_> {
 
     /// Draws `instances` primitives of `vertices` vertices from `buffer`.
     pub fn draw(&self, buffer: vk::Buffer, vertices: u32, instances: usize) {
-        if instances == 0 {
+        self.draw_range(buffer, vertices, 0, instances as u32);
+    }
+
+    /// Draws `count` primitives of `vertices` vertices from the records of `buffer` starting
+    /// at instance `first`.
+    pub fn draw_range(&self, buffer: vk::Buffer, vertices: u32, first: u32, count: u32) {
+        if count == 0 {
             return;
         }
         unsafe {
@@ -306,7 +312,7 @@ impl Pass<'_> {
                 .cmd_bind_vertex_buffers(self.cmd, 0, &[buffer], &[0]);
             self.ctx
                 .device
-                .cmd_draw(self.cmd, vertices, instances as u32, 0, 0);
+                .cmd_draw(self.cmd, vertices, count, 0, first);
         }
     }
 }

@@ -1,61 +1,71 @@
-//! Pull (§4.2): one textured line per (leaf, ancestor) adds the leaf's new I_ex into the
-//! ancestor's row of the cluster image (intensities are area-weighted, so no scaling).
+//! Pull (§4.2), bottom-up, one draw per depth: every cluster's I_ex is the sum of its two
+//! children's (O(clusters × bins) fragments, no long blends). Clusters at even and odd depths
+//! live in two float32 images, so each level reads the other parity's image while it writes
+//! its own; leaf children are read from the new leaf I_ex.
 
+use super::push::row_desc;
 use super::{begin_rendering, end_rendering, Load, Pass, PipelineSpec};
 use crate::error::Result;
 use crate::gpu::barrier::{transition, Access};
 use crate::gpu::handle::Owned;
-use crate::gpu::layout::PullLine;
-use crate::gpu::pipelines::{create, PipelineDesc, Target};
+use crate::gpu::pipelines::{create, Target};
 use crate::gpu::resources::{Resources, CLUSTER_FORMAT};
 use ash::vk;
 
-/// The pull pass's pipeline: lines additive into the float32 cluster image.
-pub fn pipeline(spec: &PipelineSpec<'_>) -> Result<Owned<vk::Pipeline>> {
-    create(
-        spec.ctx,
-        spec.layout,
-        &PipelineDesc {
-            name: "pull",
-            vert: "pull.vert",
-            frag: "pull.frag",
-            topology: vk::PrimitiveTopology::LINE_LIST,
-            stride: std::mem::size_of::<PullLine>() as u32,
-            attributes: &[(vk::Format::R32G32_UINT, 0)],
-            targets: &[Target {
-                format: CLUSTER_FORMAT,
-                additive: true,
-                write: true,
-            }],
-            specialization: &[],
-            per_vertex: false,
-            depth: false,
-        },
-    )
+/// The pull pipelines: into even-depth clusters (children odd), into odd-depth ones.
+pub fn pipelines(spec: &PipelineSpec<'_>) -> Result<[Owned<vk::Pipeline>; 2]> {
+    let put = [Target {
+        format: CLUSTER_FORMAT,
+        additive: false,
+        write: true,
+    }];
+    Ok([
+        create(
+            spec.ctx,
+            spec.layout,
+            &row_desc("pull (even depths)", "pull_even.frag", &put),
+        )?,
+        create(
+            spec.ctx,
+            spec.layout,
+            &row_desc("pull (odd depths)", "pull_odd.frag", &put),
+        )?,
+    ])
 }
 
-/// Records the pull pass reading `leaf_ex(next)`.
+/// Records the pull pass reading `leaf_ex(next)`, deepest clusters first.
 pub fn record(p: &Pass<'_>, res: &mut Resources, next: usize) {
     let im = &mut res.images;
+    let bins = res.plan.layout.bins;
     let leaf = if next == 0 {
         &mut im.leaf_ex0
     } else {
         &mut im.leaf_ex1
     };
-    transition(
-        p.ctx,
-        p.cmd,
-        &mut [
-            (leaf, Access::Sampled),
-            (&mut im.cluster_ex, Access::Attachment),
-        ],
-    );
-    begin_rendering(p.ctx, p.cmd, &[(&im.cluster_ex, Load::Clear)]);
-    p.bind(&p.pipes.pull, im.cluster_ex.extent, res.plan.layout.bins);
-    p.draw(
-        res.buffers.pull_lines.raw,
-        2,
-        res.plan.draw.pull_lines.len(),
-    );
-    end_rendering(p.ctx, p.cmd);
+    transition(p.ctx, p.cmd, &mut [(leaf, Access::Sampled)]);
+    for (range, depth) in &res.plan.draw.pull_levels {
+        let odd = depth % 2 == 1;
+        let (children, target) = if odd {
+            (&mut im.cluster_ex, &mut im.cluster_ex_odd)
+        } else {
+            (&mut im.cluster_ex_odd, &mut im.cluster_ex)
+        };
+        transition(
+            p.ctx,
+            p.cmd,
+            &mut [
+                (children, Access::Sampled),
+                (&mut *target, Access::Attachment),
+            ],
+        );
+        begin_rendering(p.ctx, p.cmd, &[(&*target, Load::Keep)]);
+        p.bind(&p.pipes.pull[odd as usize], target.extent, bins);
+        p.draw_range(
+            res.buffers.pull.raw,
+            2,
+            range.start,
+            range.end - range.start,
+        );
+        end_rendering(p.ctx, p.cmd);
+    }
 }

@@ -1,21 +1,25 @@
-//! Push (§4.2): every node that gathered radiance adds its L_in row to all rows of its subtree,
-//! a contiguous range in pre-order, drawn as one quad per column block.
+//! Push (§4.2), top-down, one draw per depth: every node's L_push is its parent's plus its own
+//! gathered L_in, so O(nodes × bins) fragments. Even depths are written into the L_push image
+//! (`push_even.frag`, reading the L_in image); odd depths are added onto their own L_in rows
+//! (`push_odd.frag`, reading the L_push image), so no pass reads the image it draws into and
+//! no extra table is needed. The local pass reads a leaf's incident light from the image of its
+//! depth's parity.
 
 use super::{begin_rendering, end_rendering, Load, Pass, PipelineSpec};
 use crate::error::Result;
 use crate::gpu::barrier::{transition, Access};
 use crate::gpu::handle::Owned;
-use crate::gpu::layout::QuadInstance;
-use crate::gpu::pipelines::{create, PipelineDesc};
+use crate::gpu::layout::{QuadInstance, RowPair};
+use crate::gpu::pipelines::{create, PipelineDesc, Target};
 use crate::gpu::resources::Resources;
 use ash::vk;
 
-/// Quads over whole rows with fragment shader `frag` (push and local passes share the vertex
-/// stage and its instance record).
+/// Quads over whole rows with fragment shader `frag` (the local pass's vertex stage and
+/// instance record).
 pub fn quad_desc<'a>(
     name: &'a str,
     frag: &'a str,
-    targets: &'a [crate::gpu::pipelines::Target],
+    targets: &'a [Target],
     specialization: &'a [u32],
 ) -> PipelineDesc<'a> {
     PipelineDesc {
@@ -32,38 +36,70 @@ pub fn quad_desc<'a>(
     }
 }
 
-/// The push pass's pipeline: additive into L_push.
-pub fn pipeline(spec: &PipelineSpec<'_>) -> Result<Owned<vk::Pipeline>> {
-    let targets = [spec.accumulate()];
-    create(
-        spec.ctx,
-        spec.layout,
-        &quad_desc("push", "push.frag", &targets, &[]),
-    )
+/// One line per node across its row (push and pull), with the row it reads besides its own.
+pub fn row_desc<'a>(name: &'a str, frag: &'a str, targets: &'a [Target]) -> PipelineDesc<'a> {
+    PipelineDesc {
+        name,
+        vert: "row.vert",
+        frag,
+        topology: vk::PrimitiveTopology::LINE_LIST,
+        stride: std::mem::size_of::<RowPair>() as u32,
+        attributes: &[(vk::Format::R32G32_UINT, 0)],
+        targets,
+        specialization: &[],
+        per_vertex: false,
+        depth: false,
+    }
 }
 
-/// Records the push pass (L_in → L_push).
+/// The push pipelines: even depths written into L_push, odd depths added onto L_in.
+pub fn pipelines(spec: &PipelineSpec<'_>) -> Result<[Owned<vk::Pipeline>; 2]> {
+    let put = [Target {
+        additive: false,
+        ..spec.accumulate()
+    }];
+    let add = [spec.accumulate()];
+    Ok([
+        create(
+            spec.ctx,
+            spec.layout,
+            &row_desc("push (even depths)", "push_even.frag", &put),
+        )?,
+        create(
+            spec.ctx,
+            spec.layout,
+            &row_desc("push (odd depths)", "push_odd.frag", &add),
+        )?,
+    ])
+}
+
+/// Records the push pass, depth by depth (L_in → L_push / L_in by parity).
 pub fn record(p: &Pass<'_>, res: &mut Resources) {
     let im = &mut res.images;
-    transition(
-        p.ctx,
-        p.cmd,
-        &mut [
-            (&mut im.l_in, Access::Sampled),
-            (&mut im.l_push, Access::Attachment),
-        ],
-    );
-    begin_rendering(p.ctx, p.cmd, &[(&im.l_push, Load::Clear)]);
-    p.bind(&p.pipes.push, im.l_push.extent, res.plan.layout.bins);
-    p.draw(
-        res.buffers.push_quads.raw,
-        4,
-        res.plan.draw.push_quads.len(),
-    );
-    end_rendering(p.ctx, p.cmd);
-}
-
-/// Clears L_push (the state before the first propagation).
-pub fn clear(p: &Pass<'_>, res: &mut Resources) {
-    super::clear(p, &mut res.images.l_push);
+    let bins = res.plan.layout.bins;
+    for (d, range) in res.plan.draw.push_levels.iter().enumerate() {
+        let odd = d % 2 == 1;
+        let (source, target) = if odd {
+            (&mut im.l_push, &mut im.l_in)
+        } else {
+            (&mut im.l_in, &mut im.l_push)
+        };
+        transition(
+            p.ctx,
+            p.cmd,
+            &mut [
+                (source, Access::Sampled),
+                (&mut *target, Access::Attachment),
+            ],
+        );
+        begin_rendering(p.ctx, p.cmd, &[(&*target, Load::Keep)]);
+        p.bind(&p.pipes.push[odd as usize], target.extent, bins);
+        p.draw_range(
+            res.buffers.push.raw,
+            2,
+            range.start,
+            range.end - range.start,
+        );
+        end_rendering(p.ctx, p.cmd);
+    }
 }

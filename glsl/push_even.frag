@@ -1,0 +1,19 @@
+#version 450
+// Push at an even depth (top-down, one draw per depth): L_push(node) = L_in(node) + the parent's
+// pushed value, which odd depths keep in the L_in image (glsl/push_odd.frag). Written into the
+// L_push image.
+#include "common.glsl"
+
+layout(binding = AR_BINDING_L_IN) uniform sampler2D l_in;
+layout(location = 0) flat in uint row;
+layout(location = 1) flat in uint other;
+layout(location = 0) out vec4 pushed;
+
+void main() {
+    uint j = ar_bin_at(ivec2(gl_FragCoord.xy));
+    vec3 v = texelFetch(l_in, ar_texel(row, j), 0).rgb;
+    if (other != 0xffffffffu) {
+        v += texelFetch(l_in, ar_texel(other, j), 0).rgb;
+    }
+    pushed = vec4(ar_store(v), 0.0);
+}
