@@ -10,7 +10,8 @@ use crate::frame::lights::direct_in_table;
 use crate::frame::Image;
 use crate::gpu::frame::GpuFrame;
 use crate::gpu::memory::MemoryReport;
-use crate::gpu::solver::Fragments;
+use crate::gpu::solver::SetupTimes;
+use crate::gpu::work::Work;
 use crate::gpu::{Context, GpuOptions, GpuSolver};
 use crate::scene::{Precision, Scheme};
 use crate::settings::BackendKind;
@@ -99,9 +100,14 @@ impl GpuBackend {
         &self.ctx
     }
 
-    /// Fragments each pass draws per propagation.
-    pub fn fragments(&self) -> Fragments {
-        self.solver.fragments()
+    /// The raster work of one propagation.
+    pub fn work(&self) -> Work {
+        self.solver.work()
+    }
+
+    /// How long creating the solver's and the frame's resources and pipelines took.
+    pub fn setup_times(&self) -> SetupTimes {
+        self.solver.setup_times() + self.frame.setup_times()
     }
 
     /// Starts a host command buffer's timestamps; call once per command buffer before the

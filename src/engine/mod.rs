@@ -8,21 +8,22 @@
 
 pub mod backend;
 pub mod cpu;
-mod drive;
+pub mod drive;
 pub mod gpu;
 pub mod options;
 pub mod prepared;
 pub mod stats;
 
 pub use backend::Backend;
+pub use drive::BATCH;
 pub use options::{GpuTuning, Options, SolverOverrides};
 pub use prepared::Prepared;
-pub use stats::{IterationFrame, RenderStats, Rendered};
+pub use stats::{IterationFrame, RenderStats, Rendered, Setup};
 
 use crate::error::{Error, Result};
 use crate::frame::Image;
 use crate::gpu::memory::MemoryReport;
-use crate::gpu::solver::Fragments;
+use crate::gpu::work::Work;
 use crate::gpu::{Context, ContextOptions};
 use crate::progress::Progress;
 use crate::scene::{Precision, Scene};
@@ -47,6 +48,7 @@ pub struct Engine {
     created: Option<Instant>,
     /// When the backend's setup began (start of the first render's `setup_ms`).
     setup_start: Option<Instant>,
+    setup: Setup,
 }
 
 /// The Vulkan context `options` ask for: the host's, or a new headless one.
@@ -101,6 +103,7 @@ impl Engine {
     ) -> Result<Self> {
         let setup_start = Instant::now();
         let mut backend = backend::create(options.backend, &prep, ctx, options.gpu)?;
+        let created_ms = ms(setup_start);
         let mut fallbacks = prep.fallbacks.clone();
         if options.backend == BackendKind::Gpu {
             fallbacks.extend(prep.plan.precision_fallback.clone());
@@ -110,16 +113,29 @@ impl Engine {
         if lights {
             progress.begin("shadow maps", 1);
         }
+        let t = Instant::now();
         backend.prepare_lights(&mut prep)?;
         if lights {
             progress.end();
         }
+        let gpu = backend
+            .as_gpu()
+            .map(|g| g.setup_times())
+            .unwrap_or_default();
+        let setup = Setup {
+            linking_ms: prep.system.meshing_ms + prep.system.links.linking_ms,
+            uploads_ms: gpu.uploads_ms,
+            pipelines_ms: gpu.pipelines_ms,
+            other_ms: (created_ms - gpu.uploads_ms - gpu.pipelines_ms).max(0.0),
+            lights_ms: ms(t),
+        };
         Ok(Self {
             prep,
             backend,
             fallbacks,
             created: Some(setup_start),
             setup_start: Some(setup_start),
+            setup,
         })
     }
 
@@ -153,9 +169,14 @@ impl Engine {
         self.backend.memory()
     }
 
-    /// Fragments each GPU pass draws per propagation (`None` for the CPU backend).
-    pub fn fragments(&mut self) -> Option<Fragments> {
-        self.backend.as_gpu().map(|g| g.fragments())
+    /// The raster work of one GPU propagation (`None` for the CPU backend).
+    pub fn work(&mut self) -> Option<Work> {
+        self.backend.as_gpu().map(|g| g.work())
+    }
+
+    /// How long preparing this engine took, by part.
+    pub fn setup(&self) -> Setup {
+        self.setup
     }
 
     /// The initial state: emission, direct light and environment reflected once, no

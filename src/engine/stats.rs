@@ -86,3 +86,26 @@ pub struct IterationFrame {
     /// Wall time (ms) of drawing this frame.
     pub frame_ms: f64,
 }
+
+/// How long preparing an engine took, by part (what `profile` reports as setup).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct Setup {
+    /// Meshing and linking on the CPU.
+    pub linking_ms: f64,
+    /// Creating and filling the GPU's images and buffers (with the CPU packing).
+    pub uploads_ms: f64,
+    /// Creating the GPU pipelines (from the pipeline cache when it holds them).
+    pub pipelines_ms: f64,
+    /// The rest of the backend's creation (layouts, descriptor sets, the float16 probe; the
+    /// CPU backend's ray caster).
+    pub other_ms: f64,
+    /// Shadow maps, the leaves' direct light and the sources' upload.
+    pub lights_ms: f64,
+}
+
+impl Setup {
+    /// Everything but linking.
+    pub fn after_linking_ms(&self) -> f64 {
+        self.uploads_ms + self.pipelines_ms + self.other_ms + self.lights_ms
+    }
+}

@@ -116,6 +116,7 @@ pub struct GpuFrame {
     views: u32,
     shadow_size: u32,
     timings: Vec<(String, f64)>,
+    setup: super::solver::SetupTimes,
     sampler: Owned<vk::Sampler>,
     _pool: Owned<vk::DescriptorPool>,
     layouts: Layouts,
@@ -171,9 +172,12 @@ impl GpuFrame {
         features: &Features,
     ) -> Result<Self> {
         let c = &ctx;
+        let t = std::time::Instant::now();
         let data = FrameData::new(scene, sys, surf, maps, features);
         let buffers = data.upload(c)?;
         let images = Self::describe(camera, features, maps).try_map(|d| d.create(c))?;
+        let uploads_ms = t.elapsed().as_secs_f64() * 1e3;
+        let t = std::time::Instant::now();
         let kinds = descriptor_kinds(fb::COUNT, &fb::BUFFERS);
         let layouts = Layouts::with(
             c,
@@ -193,6 +197,10 @@ impl GpuFrame {
             splat: passes::splat::pipeline(c, &layouts.pipeline, &specialization)?,
             compose: passes::compose::pipeline(c, &layouts.pipeline, &specialization)?,
         };
+        let setup = super::solver::SetupTimes {
+            uploads_ms,
+            pipelines_ms: t.elapsed().as_secs_f64() * 1e3,
+        };
         let sampler = pipelines::texel_sampler(c, "frame sampler")?;
         let pool = pipelines::descriptor_pool(c, &kinds, 1, "frame descriptor pool")?;
         let set = pipelines::allocate_set(c, &pool, &layouts.set, "frame set")?;
@@ -210,6 +218,7 @@ impl GpuFrame {
             pipes,
             set,
             timings: Vec::new(),
+            setup,
             sampler,
             _pool: pool,
             layouts,
@@ -396,6 +405,11 @@ impl GpuFrame {
             height: h,
             pixels: texels.iter().map(|t| [t[0], t[1], t[2]]).collect(),
         })
+    }
+
+    /// How long creating the frame's resources and pipelines took.
+    pub fn setup_times(&self) -> super::solver::SetupTimes {
+        self.setup
     }
 
     /// Pass timings (ms) of the last submission.

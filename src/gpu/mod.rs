@@ -20,6 +20,7 @@ pub mod resources;
 pub mod shaders;
 pub mod solver;
 pub mod tables;
+pub mod work;
 
 pub use context::{Context, ContextOptions, HostDevice, LineMode};
 pub use error::GpuError;

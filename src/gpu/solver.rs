@@ -49,19 +49,6 @@ impl Default for GpuOptions {
     }
 }
 
-/// Fragments each pass draws per propagation (the raster work, §4.2).
-#[derive(Debug, Clone, Default, serde::Serialize)]
-pub struct Fragments {
-    /// Global: Σ link spans.
-    pub global: u64,
-    /// Push: Σ quad rows × bins.
-    pub push: u64,
-    /// Local: irradiance texels + leaf rows × bins.
-    pub local: u64,
-    /// Pull: (leaf, ancestor) pairs × bins.
-    pub pull: u64,
-}
-
 /// Images a host application may read (all in `SHADER_READ_ONLY_OPTIMAL` after a recorded
 /// iteration), with the layout that addresses them.
 #[derive(Debug, Clone, Copy)]
@@ -96,6 +83,27 @@ pub struct GpuSolver {
     /// Whether each row's depth is odd (where push leaves its L_push).
     depth_parity: Vec<bool>,
     reducer: Reducer,
+    work: super::work::Work,
+    setup: SetupTimes,
+}
+
+/// Wall time of a GPU object's creation, split as `profile` reports it.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct SetupTimes {
+    /// Creating images and buffers and uploading their contents (with the CPU packing).
+    pub uploads_ms: f64,
+    /// Creating pipelines (from the pipeline cache when it holds them).
+    pub pipelines_ms: f64,
+}
+
+impl std::ops::Add for SetupTimes {
+    type Output = Self;
+    fn add(self, o: Self) -> Self {
+        Self {
+            uploads_ms: self.uploads_ms + o.uploads_ms,
+            pipelines_ms: self.pipelines_ms + o.pipelines_ms,
+        }
+    }
 }
 
 impl GpuSolver {
@@ -128,17 +136,30 @@ impl GpuSolver {
             opts.column_height.unwrap_or(u32::MAX),
             ctx.info.max_image_dimension,
         )?;
+        let work = super::work::Work::of(sys, &plan);
+        let t = std::time::Instant::now();
         let layouts = Layouts::new(&ctx)?;
         let res = Resources::new(&ctx, plan, sys, layouts.set.raw())?;
-        let pipes = SolverPipelines::new(&PipelineSpec {
+        let uploads_ms = t.elapsed().as_secs_f64() * 1e3;
+        let t = std::time::Instant::now();
+        let spec = PipelineSpec {
             ctx: &ctx,
             layout: &layouts.pipeline,
             format,
             accum_format,
             features,
-        })?;
+        };
+        let mut pipes = SolverPipelines::new(&spec)?;
+        // Every local variant now, so no pipeline is built during the iterations.
+        for m in [mode::BOTH, mode::REFLECT, mode::ANTIRADIANCE] {
+            pipes.ensure_local(&spec, &res, m)?;
+        }
         let profiler = Profiler::new(&ctx, 1024)?;
         let reducer = Reducer::new(&ctx, &res)?;
+        let setup = SetupTimes {
+            uploads_ms,
+            pipelines_ms: t.elapsed().as_secs_f64() * 1e3,
+        };
         let layout = *res.layout();
         let constants = PassConstants {
             bins: layout.bins,
@@ -176,11 +197,18 @@ impl GpuSolver {
                 .map(|n| n.depth % 2 == 1)
                 .collect(),
             reducer,
+            work,
+            setup,
         })
         .and_then(|mut s| {
             s.update_scale()?;
             Ok(s)
         })
+    }
+
+    /// How long creating this solver took.
+    pub fn setup_times(&self) -> SetupTimes {
+        self.setup
     }
 
     /// Departures from the requested configuration, each a sentence for stderr and the stats JSON.
@@ -613,17 +641,9 @@ impl GpuSolver {
         self.res.memory()
     }
 
-    /// Fragments drawn per propagation by each pass.
-    pub fn fragments(&self) -> Fragments {
-        let d = self.res.draw();
-        let m = self.res.layout().bins as u64;
-        let leaves: u64 = d.leaf_quads.iter().map(|q| (q.end - q.first) as u64).sum();
-        Fragments {
-            global: d.global_fragments,
-            push: d.push.len() as u64 * m,
-            local: leaves * (m + 1),
-            pull: d.pull.len() as u64 * m,
-        }
+    /// The raster work of one propagation ([`super::work::Work`]).
+    pub fn work(&self) -> super::work::Work {
+        self.work
     }
 
     /// Links drawn by the global pass.
