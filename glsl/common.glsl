@@ -26,6 +26,10 @@
 #define AR_BINDING_RUNS 16
 #define AR_BINDING_LOBE_BINS 17
 
+// The glossy lobes' incident-bin lists are per cell of a grid this much finer (per side) than
+// the bins' (src/gpu/pack.rs LOBE_REFINE).
+#define AR_LOBE_REFINE 4u
+
 // Link records (src/gpu/layout.rs GpuLink): rows in the low bits, combo halves above.
 #define AR_LINK_ROW_BITS 22u
 

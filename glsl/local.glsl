@@ -74,8 +74,11 @@ void ar_local() {
             if (AR_GLOSSY && mat.kd.a >= 0.0) {
                 // The truncated lobe (src/brdf.rs LOBE_CUTOFF): only incident bins listed for
                 // the mirror direction's bin, and of those only the ones inside the cone.
-                uint head = uint(mat.kd.a) * (pc.bins + 1u);
-                uint b = ar_bin_of(dir - 2.0 * dot(dir, n) * n, pc.bins / pc.grid_rows, pc.grid_rows);
+                // Lists per cell of a lookup grid AR_LOBE_REFINE times finer than the bins'.
+                uint nu = pc.bins / pc.grid_rows * AR_LOBE_REFINE;
+                uint nv = pc.grid_rows * AR_LOBE_REFINE;
+                uint head = uint(mat.kd.a) * (nu * nv + 1u);
+                uint b = ar_bin_of(dir - 2.0 * dot(dir, n) * n, nu, nv);
                 uint first = lobe_bins[head + b];
                 bool all = first == 0xffffffffu;
                 uint count = all ? pc.bins : lobe_bins[head + b + 1u] - first;

@@ -43,6 +43,35 @@ pub fn square_to_direction(u: f64, v: f64) -> DVec3 {
     DVec3::new(phi.cos().copysign(u) * s, phi.sin().copysign(v) * s, z).normalize()
 }
 
+/// The direction at the center of cell `cell` (row-major) of an `nu × nv` grid on the
+/// equal-area square (the bins' grid, or a finer one for lookups).
+pub fn grid_cell_center(nu: usize, nv: usize, cell: usize) -> DVec3 {
+    let (iu, iv) = ((cell % nu) as f64, (cell / nu) as f64);
+    square_to_direction(
+        (iu + 0.5) / nu as f64 * 2.0 - 1.0,
+        (iv + 0.5) / nv as f64 * 2.0 - 1.0,
+    )
+}
+
+/// Largest angle between a cell's center and any point of the cell, over all cells of an
+/// `nu × nv` grid on the equal-area square (sampled along the cells' edges, with a 1% margin).
+pub fn grid_cell_radius(nu: usize, nv: usize) -> f64 {
+    let mut worst: f64 = 0.0;
+    for cell in 0..nu * nv {
+        let c = grid_cell_center(nu, nv, cell);
+        let (iu, iv) = ((cell % nu) as f64, (cell / nu) as f64);
+        for k in 0..=8 {
+            let t = k as f64 / 8.0;
+            for (fu, fv) in [(t, 0.0), (t, 1.0), (0.0, t), (1.0, t)] {
+                let u = (iu + fu) / nu as f64 * 2.0 - 1.0;
+                let v = (iv + fv) / nv as f64 * 2.0 - 1.0;
+                worst = worst.max(square_to_direction(u, v).dot(c).clamp(-1.0, 1.0).acos());
+            }
+        }
+    }
+    worst * 1.01
+}
+
 /// The directional discretization: grid sizes, bin centers and the bin solid angle.
 #[derive(Debug, Clone)]
 pub struct Bins {
@@ -87,24 +116,10 @@ impl Bins {
         iv * self.nu + iu
     }
 
-    /// Largest angle between a bin's center and any point of its cell (sampled along the cell's
-    /// edges, with a 1% margin): a direction's bin center is never farther from it.
+    /// Largest angle between a bin's center and any point of its cell
+    /// ([`grid_cell_radius`] of the bins' grid): a direction's bin center is never farther.
     pub fn cell_radius(&self) -> f64 {
-        let (nu, nv) = (self.nu as f64, self.nv as f64);
-        let mut worst: f64 = 0.0;
-        for b in 0..self.count {
-            let (iu, iv) = ((b % self.nu) as f64, (b / self.nu) as f64);
-            for k in 0..=8 {
-                let t = k as f64 / 8.0;
-                for (fu, fv) in [(t, 0.0), (t, 1.0), (0.0, t), (1.0, t)] {
-                    let u = (iu + fu) / nu * 2.0 - 1.0;
-                    let v = (iv + fv) / nv * 2.0 - 1.0;
-                    let d = square_to_direction(u, v);
-                    worst = worst.max(d.dot(self.centers[b]).clamp(-1.0, 1.0).acos());
-                }
-            }
-        }
-        worst * 1.01
+        grid_cell_radius(self.nu, self.nv)
     }
 
     /// Angular distance between neighbouring bin centers, `√(4π/m)`: the Gaussian's deviation (§3.1).

@@ -100,9 +100,11 @@ impl AlbedoTable {
 /// The local pass's Phong sum keeps only terms whose lobe value is above this fraction of the
 /// lobe's peak (the cone `cos α > LOBE_CUTOFF^(1/exponent)` around the mirror direction); the
 /// per-bin factors renormalize over what is kept, so the discrete lobe still reflects exactly
-/// the material's directional albedo. At exponent 30 the cone is 37°: about 13 of 128 bins
-/// instead of the 64 of a hemisphere.
-pub const LOBE_CUTOFF: f64 = 1e-3;
+/// the material's directional albedo. At exponent 30 the cone is 31°: about 9 of 128 bins
+/// instead of the 64 of a hemisphere. Measured on the glossy Cornell box (96², CPU): the image
+/// is 2.9e-4 (relative RMSE) from the untruncated lobe's; 1e-3 would give 3.1e-5 with 35% more
+/// terms.
+pub const LOBE_CUTOFF: f64 = 1e-2;
 
 /// A glossy material's lobe as the local pass applies it in the bins: the effective exponent,
 /// the cone it is truncated to and, per leaf, one factor per incident bin.

@@ -11,8 +11,9 @@ use crate::bins::Bins;
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
-/// Weights below this fraction of a row's largest weight are dropped (they cost fragments on the GPU).
-const CUTOFF: f64 = 1e-3;
+/// Default truncation: weights below this fraction of a row's largest weight are dropped (they
+/// cost fragments on the GPU); `solver.filter_cutoff` sets another.
+pub const CUTOFF: f64 = 1e-3;
 
 /// Number of cone classes for a given bin count: class `c ≥ 1` covers sender solid angles in
 /// `(ω_bin·2^(c-1), ω_bin·2^c]`, the last one everything up to a hemisphere and beyond.
@@ -51,8 +52,9 @@ pub struct FilterTables {
 }
 
 impl FilterTables {
-    /// Builds the tables for the classes flagged in `used` (index = class).
-    pub fn new(bins: &Bins, used: &[bool]) -> Self {
+    /// Builds the tables for the classes flagged in `used` (index = class), dropping weights
+    /// below `cutoff` of each row's largest.
+    pub fn new(bins: &Bins, used: &[bool], cutoff: f64) -> Self {
         let s = bins.spacing();
         let rows = used
             .iter()
@@ -78,7 +80,7 @@ impl FilterTables {
                         let kept: Vec<(u32, f64)> = w
                             .iter()
                             .enumerate()
-                            .filter(|(_, &x)| x >= CUTOFF)
+                            .filter(|(_, &x)| x >= cutoff)
                             .map(|(j, &x)| (j as u32, x))
                             .collect();
                         let sum: f64 = kept.iter().map(|k| k.1).sum();
@@ -144,7 +146,7 @@ mod tests {
     fn tables_are_normalized_and_centered() {
         let bins = Bins::new(128).unwrap();
         let used = vec![true; class_count(&bins)];
-        let t = FilterTables::new(&bins, &used);
+        let t = FilterTables::new(&bins, &used, CUTOFF);
         assert_eq!(t.used_classes().len(), class_count(&bins));
         for c in 0..class_count(&bins) {
             for l in 0..bins.count {

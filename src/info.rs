@@ -40,6 +40,9 @@ pub struct Info {
     /// the plan's precision), `frame_images` for the frame at the camera's size, `cpu_tables` for
     /// the f64 solver.
     pub memory_bytes: BTreeMap<String, u64>,
+    /// The GPU passes' raster work per propagation (fragments, blended fragments, primitives;
+    /// Phong-sum terms), counted from the draw records.
+    pub work: crate::gpu::work::Work,
     /// Passes a render of this scene runs, in order (the scene analysis, [`Plan::passes`]).
     pub passes: Vec<String>,
     /// What the analysis decided and why.
@@ -65,8 +68,10 @@ impl Info {
         let rows = sys.rows() as u64;
         let m = sys.bins.count as u64;
         let format = table_format(plan.precision);
-        let gpu = ResourcePlan::new(sys, &plan.features, plan.precision, format, u32::MAX, 16384)?
-            .memory();
+        let resources =
+            ResourcePlan::new(sys, &plan.features, plan.precision, format, u32::MAX, 16384)?;
+        let gpu = resources.memory();
+        let work = crate::gpu::work::Work::of(sys, &resources);
         let mut mem = gpu.by_name();
         mem.remove("total");
         let frame = GpuFrame::planned_memory(&prep.camera, &plan.features, &prep.maps);
@@ -89,6 +94,7 @@ impl Info {
             linking_ms: sys.links.linking_ms,
             links_per_second: sys.links.links_per_second(),
             memory_bytes: mem,
+            work,
             passes: plan.passes(),
             decisions: plan.decisions.clone(),
             shading: plan.shading.clone(),
@@ -112,6 +118,16 @@ impl Info {
         );
         for (k, v) in &self.memory_bytes {
             s += &format!("  {k:<22}{:>10.2} MB\n", *v as f64 / 1e6);
+        }
+        s += "work per propagation (fragments, blended, primitives)\n";
+        for (k, w) in self.work.passes() {
+            s += &format!(
+                "  {k:<8}{:>14}{:>14}{:>12}\n",
+                w.fragments, w.blended, w.primitives
+            );
+        }
+        if self.work.glossy_terms > 0 {
+            s += &format!("  glossy terms {}\n", self.work.glossy_terms);
         }
         s += &format!("passes     {}\n", self.passes.join(", "));
         for d in &self.decisions {

@@ -126,7 +126,7 @@ impl System {
             });
         }
         let mut links = build_links(&hierarchy, &elements, &bins, settings.oracle, max_links)?;
-        let filters = FilterTables::new(&bins, &links.used_classes);
+        let filters = FilterTables::new(&bins, &links.used_classes, settings.filter_cutoff);
         let t1 = Instant::now();
         crate::linker::exact_leaf_form_factors(&mut links, &hierarchy, &elements, &bins, &filters);
         links.linking_ms += t1.elapsed().as_secs_f64() * 1e3;

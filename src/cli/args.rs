@@ -206,6 +206,9 @@ pub struct SolverArgs {
     /// Override `solver.precision`.
     #[arg(long, value_enum)]
     pub precision: Option<Precision>,
+    /// Override `solver.filter_cutoff` (cone-filter truncation, fraction of a row's peak).
+    #[arg(long, value_parser = positive)]
+    pub filter_cutoff: Option<f64>,
 }
 
 impl SolverArgs {
@@ -216,6 +219,7 @@ impl SolverArgs {
             iterations: self.iterations,
             scheme: self.scheme,
             precision: self.precision,
+            filter_cutoff: self.filter_cutoff,
             ..Default::default()
         }
     }

@@ -30,6 +30,8 @@ pub struct SolverOverrides {
     pub tolerance: Option<f64>,
     /// Iteration cap with a tolerance.
     pub max_iterations: Option<usize>,
+    /// Truncation of the cone filters.
+    pub filter_cutoff: Option<f64>,
 }
 
 impl SolverOverrides {
@@ -45,6 +47,7 @@ impl SolverOverrides {
         s.antiradiance_steps = self.antiradiance_steps.unwrap_or(s.antiradiance_steps);
         s.tolerance = self.tolerance.or(s.tolerance);
         s.max_iterations = self.max_iterations.unwrap_or(s.max_iterations);
+        s.filter_cutoff = self.filter_cutoff.unwrap_or(s.filter_cutoff);
         s
     }
 }
@@ -165,6 +168,13 @@ impl Options {
             return bad(format!(
                 "antiradiance steps must be 1..={MAX_ANTIRADIANCE_STEPS}, got {n}"
             ));
+        }
+        if let Some(c) = self
+            .solver
+            .filter_cutoff
+            .filter(|c| !(1e-9..=0.5).contains(c))
+        {
+            return bad(format!("--filter-cutoff must be in [1e-9, 0.5], got {c}"));
         }
         if let Some(o) = self.solver.oracle.filter(|o| !(*o > 0.0 && o.is_finite())) {
             return bad(format!("the oracle τ must be positive and finite, got {o}"));

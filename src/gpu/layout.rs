@@ -554,5 +554,9 @@ mod tests {
         }
         assert_eq!(spec::COUNT, 8);
         assert!(COMMON.contains(&format!("#define AR_FLAG_HALF {FLAG_HALF}u\n")));
+        assert!(COMMON.contains(&format!(
+            "#define AR_LOBE_REFINE {}u\n",
+            crate::gpu::pack::LOBE_REFINE
+        )));
     }
 }

@@ -143,37 +143,50 @@ pub fn solver_materials(sys: &System) -> Vec<GpuMaterial> {
 /// Offset marking a lobe whose neighbourhood is every bin (the shader loops over all of them).
 pub const ALL_BINS: u32 = u32::MAX;
 
+/// The lobe lists are looked up by the mirror direction's cell in a grid this many times finer
+/// (per side) than the bins': a list must hold every bin within the cone of any direction in
+/// the cell, so a smaller cell lists fewer bins beyond the cone itself.
+pub const LOBE_REFINE: usize = 4;
+
 /// For every glossy material's lobe, the incident bins that can be in its truncated cone around
-/// a mirror direction in each bin: `bins + 1` offsets per lobe (into this same buffer, or
-/// [`ALL_BINS`] when the cone is too wide to be worth a list), then the lists. Bin `l` is listed
-/// for bin `b` when its center lies within the cone's angle plus [`crate::bins::Bins::cell_radius`]
-/// of `b`'s center, so every term the cone keeps is found.
+/// a mirror direction, per cell of the lookup grid (the bins' grid refined [`LOBE_REFINE`]
+/// times per side): `cells + 1` offsets per lobe (into this same buffer, or [`ALL_BINS`] when
+/// the cone is too wide to be worth a list), then the lists. Bin `l` is listed for a cell when
+/// its center lies within the cone's angle plus the cell's radius of the cell's center, so every
+/// term the cone keeps is found.
 pub fn lobe_bins(sys: &System) -> Vec<u32> {
-    let m = sys.bins.count;
+    use rayon::prelude::*;
+    let (nu, nv) = (sys.bins.nu * LOBE_REFINE, sys.bins.nv * LOBE_REFINE);
+    let cells = nu * nv;
     let lobes: Vec<_> = sys.lobes.iter().flatten().collect();
     if lobes.is_empty() {
         return Vec::new();
     }
-    let radius = sys.bins.cell_radius();
-    let mut out = vec![0u32; lobes.len() * (m + 1)];
+    let radius = crate::bins::grid_cell_radius(nu, nv);
+    let mut out = vec![0u32; lobes.len() * (cells + 1)];
     for (k, lobe) in lobes.iter().enumerate() {
         let reach = lobe.cos_cut.clamp(-1.0, 1.0).acos() + radius;
-        let head = k * (m + 1);
+        let head = k * (cells + 1);
         // A cone reaching past a hemisphere lists more than half the bins: loop over all.
         if reach >= std::f64::consts::FRAC_PI_2 {
-            out[head..head + m + 1].fill(ALL_BINS);
+            out[head..head + cells + 1].fill(ALL_BINS);
             continue;
         }
         let cos_reach = reach.cos();
-        for b in 0..m {
-            out[head + b] = out.len() as u32;
-            let c = sys.bins.centers[b];
-            let near: Vec<u32> = (0..m as u32)
-                .filter(|&l| sys.bins.centers[l as usize].dot(c) >= cos_reach)
-                .collect();
-            out.extend(near);
+        let lists: Vec<Vec<u32>> = (0..cells)
+            .into_par_iter()
+            .map(|cell| {
+                let c = crate::bins::grid_cell_center(nu, nv, cell);
+                (0..sys.bins.count as u32)
+                    .filter(|&l| sys.bins.centers[l as usize].dot(c) >= cos_reach)
+                    .collect()
+            })
+            .collect();
+        for (cell, list) in lists.into_iter().enumerate() {
+            out[head + cell] = out.len() as u32;
+            out.extend(list);
         }
-        out[head + m] = out.len() as u32;
+        out[head + cells] = out.len() as u32;
     }
     out
 }
@@ -182,6 +195,8 @@ pub fn lobe_bins(sys: &System) -> Vec<u32> {
 /// the incident bins listed for each one's mirror direction).
 pub fn glossy_terms(sys: &System, lobe_bins: &[u32]) -> u64 {
     let m = sys.bins.count;
+    let (nu, nv) = (sys.bins.nu * LOBE_REFINE, sys.bins.nv * LOBE_REFINE);
+    let cells = nu * nv;
     let mut class = vec![None; sys.materials.len()];
     let mut k = 0;
     for (i, l) in sys.lobes.iter().enumerate() {
@@ -197,13 +212,16 @@ pub fn glossy_terms(sys: &System, lobe_bins: &[u32]) -> u64 {
             let Some(k) = class[leaf.material as usize] else {
                 return 0;
             };
-            let head = k * (m + 1);
+            let head = k * (cells + 1);
             sys.bins
                 .centers
                 .iter()
                 .filter(|d| d.dot(leaf.normal) > 0.0)
                 .map(|d| {
-                    let b = sys.bins.bin_of(crate::brdf::mirror(*d, leaf.normal));
+                    let (u, v) = crate::bins::direction_to_square(crate::brdf::mirror(*d, leaf.normal));
+                    let iu = (((u + 1.0) * 0.5 * nu as f64) as usize).min(nu - 1);
+                    let iv = (((v + 1.0) * 0.5 * nv as f64) as usize).min(nv - 1);
+                    let b = iv * nu + iu;
                     if lobe_bins[head + b] == ALL_BINS {
                         m as u64
                     } else {

@@ -192,10 +192,6 @@ pub fn bin_runs(
     row: &[(u32, f32)],
     keep: impl Fn(u32) -> bool,
 ) -> Vec<(u32, u32)> {
-    let gap: u32 = std::env::var("AR_GAP")
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(0);
     let mut positions: Vec<u32> = row
         .iter()
         .filter(|e| keep(e.0))
@@ -205,7 +201,7 @@ pub fn bin_runs(
     let mut runs: Vec<(u32, u32)> = Vec::new();
     for p in positions {
         match runs.last_mut() {
-            Some(r) if r.1 + gap >= p => r.1 = p + 1,
+            Some(r) if r.1 == p => r.1 = p + 1,
             _ => runs.push((p, p + 1)),
         }
     }

@@ -256,4 +256,7 @@ pub struct SolverDesc {
     pub tolerance: Option<f64>,
     /// Iteration cap when a tolerance is given, 1..=[`super::MAX_ITERATIONS`].
     pub max_iterations: Option<i64>,
+    /// Cone-filter weights below this fraction of a row's largest are dropped, in
+    /// [1e-9, 0.5].
+    pub filter_cutoff: Option<f64>,
 }

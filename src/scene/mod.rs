@@ -166,6 +166,10 @@ pub struct SolverSettings {
     pub tolerance: Option<f64>,
     /// Iteration cap when `tolerance` is given: 1..=[`MAX_ITERATIONS`].
     pub max_iterations: usize,
+    /// Truncation of the cone filters (§3.1): weights below this fraction of a row's largest are
+    /// dropped and the row renormalized, in [1e-9, 0.5] ([`crate::filter::CUTOFF`] by default;
+    /// the README gives the error each choice costs, measured).
+    pub filter_cutoff: f64,
 }
 
 impl Default for SolverSettings {
@@ -181,6 +185,7 @@ impl Default for SolverSettings {
             max_elements: 2_000_000,
             tolerance: None,
             max_iterations: 1000,
+            filter_cutoff: crate::filter::CUTOFF,
         }
     }
 }

@@ -129,6 +129,16 @@ pub fn solver_settings(s: &SolverDesc, path: &Path) -> Result<SolverSettings> {
             "solver.max_iterations",
             path,
         )?,
+        filter_cutoff: match s.filter_cutoff {
+            None => d.filter_cutoff,
+            Some(c) if (1e-9..=0.5).contains(&c) => c,
+            Some(c) => {
+                return Err(scene_err(
+                    path,
+                    format!("`solver.filter_cutoff` must be in [1e-9, 0.5], got {c}"),
+                ))
+            }
+        },
     })
 }
 
