@@ -128,6 +128,11 @@ pub fn render_checked(
     let ctx = gpu.then(context);
     let options = antiradiance::Options {
         context: ctx.clone(),
+        gpu: antiradiance::engine::GpuTuning {
+            force_table_accumulation: options.gpu.force_table_accumulation
+                || force_f16_accumulation(),
+            ..options.gpu
+        },
         ..options
     };
     let backend = options.backend;
@@ -163,6 +168,36 @@ pub fn render_checked(
         r.stats.warnings
     );
     r
+}
+
+/// `ANTIRADIANCE_TEST_F16_ACCUMULATION=1`: every GPU solve in the tests accumulates L_in and
+/// L_push in float16 tables as on a device that rounds float16 blending. lavapipe truncates float16
+/// blending, so by default the solver accumulates in float32 there and says so in `fallbacks`;
+/// with this set, lavapipe runs the float16 path (with truncation, worse than a rounding device)
+/// and the tests apply their float16-accumulation bounds, which were measured this way.
+pub fn force_f16_accumulation() -> bool {
+    std::env::var("ANTIRADIANCE_TEST_F16_ACCUMULATION").is_ok_and(|v| v == "1")
+}
+
+/// Whether a GPU solve with these `fallbacks` and `precision` accumulated in float16 (a device
+/// that rounds float16 blending, or [`force_f16_accumulation`]); false for float32 tables and
+/// where the solver fell back to float32 accumulation (lavapipe).
+pub fn accumulated_f16(precision: antiradiance::Precision, fallbacks: &[String]) -> bool {
+    precision == antiradiance::Precision::F16
+        && !fallbacks
+            .iter()
+            .any(|f| f.contains("truncates float16 blending"))
+}
+
+/// A bound for a GPU figure: `table` where the tables are float32 or L_in and L_push accumulate
+/// in float32 (lavapipe's fallback), `f16` where they accumulate in float16 (measured on lavapipe
+/// with truncation, [`force_f16_accumulation`]; a device that rounds should stay well inside).
+pub fn gpu_bound(r: &antiradiance::engine::Rendered, table: f64, f16: f64) -> f64 {
+    if accumulated_f16(r.stats.precision, &r.stats.fallbacks) {
+        f16
+    } else {
+        table
+    }
 }
 
 /// Points the camera from `eye` at `target` with a square image of `size` pixels.
