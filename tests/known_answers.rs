@@ -110,7 +110,8 @@ fn perpendicular_unit_squares_exchange_the_analytic_flux() {
     );
 }
 
-/// The paper reports < 1e-4 between the schemes on its office after 300 iterations.
+/// Both schemes have the same fixed point (the paper reports < 1e-4 between them on its office
+/// after 300 iterations).
 #[test]
 fn symmetric_and_asymmetric_schemes_agree_on_the_cornell_box() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.toml");
@@ -141,8 +142,11 @@ fn symmetric_and_asymmetric_schemes_agree_on_the_cornell_box() {
         .zip(&b.i_total.data)
         .map(|(x, y)| (*x - *y).abs().max_element())
         .fold(0.0, f64::max);
+    println!("schemes differ by {:.2e} of the maximum", worst / max);
+    // Measured 2.2e-12 after converging both to a residual of 1e-12 (the paper: < 1e-4 after 300
+    // iterations on its office).
     assert!(
-        worst / max < 1e-4,
+        worst / max < 1e-11,
         "schemes differ by {:.2e} of the maximum",
         worst / max
     );
