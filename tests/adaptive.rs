@@ -435,6 +435,8 @@ fn convex_enclosure_with_cluster_links_is_closer_to_the_exact_answer_without_ant
         "uniform room, τ = 1, 64 bins: mean error without antiradiance {plan:.4}, with {all:.4}"
     );
     assert!(plan < all, "{plan} vs {all}");
+    // Measured 5.26% and 6.72% (bounds 1.5×: a bias of the discretization).
+    assert!(plan < 0.079 && all < 0.1, "{plan} vs {all}");
 }
 
 /// What the plan leaves out is not allocated: `info`'s memory (tables, frame images) and the
