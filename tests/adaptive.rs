@@ -303,7 +303,8 @@ fn every_rule_at_the_default_settings() {
     // (scene, CPU bounds, GPU bounds with float16 tables accumulated in float32, with float16
     // accumulation); None: the scene is not run on the GPU.
     type Bounds = (f64, f64);
-    let cases: [(&str, Bounds, Option<(Bounds, Bounds)>); 7] = [
+    type GpuBounds = Option<(Bounds, Bounds)>;
+    let cases: [(&str, Bounds, GpuBounds); 7] = [
         ("convex-room.toml", (3.6e-2, 2.5e-2), None),
         ("occluded-room.toml", (0.0, 0.0), None),
         ("glossy-room.toml", (0.0, 0.0), None),
