@@ -28,8 +28,10 @@ struct Bounds {
     mean_bias: f64,
     /// Median relative error of the pixels only indirect light reaches (None: the scene has few).
     indirect_median: Option<f64>,
-    /// `metrics::relative_errors` of the GPU image against the CPU image.
+    /// `metrics::relative_errors` of the GPU image against the CPU image, and the same with
+    /// float16 accumulation (`common::gpu_bound`).
     gpu_vs_cpu: f64,
+    gpu_vs_cpu_f16: f64,
 }
 
 /// Renders `scene` on both backends at its own settings, measures each image against `truth`
@@ -41,7 +43,7 @@ fn check(name: &str, scene: &Scene, truth: &Truth, bounds: &Bounds) {
             && m.mean_bias.abs() < bounds.mean_bias
             && bounds.indirect_median.is_none_or(|b| m.indirect_median < b)
     };
-    let mut images = Vec::new();
+    let mut renders = Vec::new();
     for backend in [Backend::Cpu, Backend::Gpu] {
         let t = std::time::Instant::now();
         let r = render_checked(name, scene, Options::backend(backend));
@@ -60,14 +62,14 @@ fn check(name: &str, scene: &Scene, truth: &Truth, bounds: &Bounds) {
             bounds.mean_bias,
             bounds.indirect_median
         );
-        images.push(r.image);
+        renders.push(r);
     }
-    let (gpu_vs_cpu, _) = relative_errors(&images[1], &images[0]).unwrap();
+    let (gpu_vs_cpu, _) = relative_errors(&renders[1].image, &renders[0].image).unwrap();
     println!("{name}: GPU image vs CPU image, relative RMSE {gpu_vs_cpu:.2e}");
+    let limit = gpu_bound(&renders[1], bounds.gpu_vs_cpu, bounds.gpu_vs_cpu_f16);
     assert!(
-        gpu_vs_cpu < bounds.gpu_vs_cpu,
-        "{name}: GPU vs CPU {gpu_vs_cpu:.2e} ≥ {:.0e}",
-        bounds.gpu_vs_cpu
+        gpu_vs_cpu < limit,
+        "{name}: GPU vs CPU {gpu_vs_cpu:.2e} ≥ {limit:.1e}"
     );
     let silent = &antiradiance::progress::Silent;
     let options = Options::backend(Backend::Cpu);
@@ -214,7 +216,10 @@ fn corridors() -> Scene {
 
 // Bounds: the figures measured on this machine (lavapipe; the GPU is within 1e-3 of the CPU
 // figure) times 1.5 for the relative RMSE and the indirect median, 3 for the mean bias (a small
-// difference of two means) and 3 for GPU vs CPU. The errors are bias, not noise (the reference is
+// difference of two means) and 3 for GPU vs CPU. With float16 accumulation (lavapipe truncating,
+// `ANTIRADIANCE_TEST_F16_ACCUMULATION=1`) the GPU's figures against the path tracer stay inside
+// the same bounds (Cornell box 0.306, mean −3.6%); GPU vs CPU measured 3.9e-3 (block), 4.2e-2
+// (slabs), 5.6e-2 (corridors), 3.0e-2 (Cornell box), bounds 3× those. The errors are bias, not noise (the reference is
 // fixed by its seed, and its noise is printed beside each figure): a change of the method moves
 // them, so when one improves, tighten its bound to the new figure. Area emitters' direct light
 // still goes through the directional bins (issue 17), which is most of the block's and the Cornell
@@ -231,6 +236,7 @@ fn block_on_a_floor_under_an_emitter() {
         mean_bias: 0.038,
         indirect_median: None,
         gpu_vs_cpu: 5e-4,
+        gpu_vs_cpu_f16: 1.2e-2,
     };
     check("block on a floor", &s, &truth, &bounds);
 }
@@ -249,6 +255,7 @@ fn black_and_grey_slabs_between_an_emitter_and_a_floor() {
         mean_bias: 0.24,
         indirect_median: Some(6.3),
         gpu_vs_cpu: 8e-4,
+        gpu_vs_cpu_f16: 0.125,
     };
     check("slabs", &s, &truth, &bounds);
 }
@@ -266,6 +273,7 @@ fn open_topped_corridors_lit_only_after_reflection() {
         mean_bias: 0.026,
         indirect_median: Some(0.19),
         gpu_vs_cpu: 2.5e-3,
+        gpu_vs_cpu_f16: 0.17,
     };
     check("corridors", &s, &truth, &bounds);
 }
@@ -286,6 +294,7 @@ fn cornell_box_at_low_resolution() {
         mean_bias: 0.06,
         indirect_median: Some(0.30),
         gpu_vs_cpu: 7e-2,
+        gpu_vs_cpu_f16: 9e-2,
     };
     check("cornell box", &s, &truth, &bounds);
 }
