@@ -15,5 +15,5 @@ void main() {
     if (other != 0xffffffffu) {
         v += texelFetch(l_in, ar_texel(other, j), 0).rgb;
     }
-    pushed = vec4(ar_store(v), 0.0);
+    pushed = vec4(v, 0.0);
 }

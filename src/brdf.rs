@@ -228,23 +228,62 @@ mod tests {
         assert!(directional_albedo(0.0, 1.0) <= 1.0 + 1e-9);
     }
 
+    /// `∫ (ns+2)/(2π) cos^ns(α) cos⁺θ_o dω_o` for light travelling along `incident`, by a dense
+    /// midpoint rule in polar coordinates around the mirror direction (α up to where the lobe is
+    /// below 1e-15 of its peak, φ all around), written here independently of
+    /// [`directional_albedo`]'s substitution.
+    fn continuous_albedo(ns: f64, n: DVec3, incident: DVec3) -> f64 {
+        let r = mirror(incident, n);
+        let t = r.any_orthonormal_vector();
+        let b = r.cross(t);
+        let alpha_max = if ns > 0.0 {
+            (PI / 2.0).min((-(1e-15f64).ln() / ns).sqrt() * 2.0)
+        } else {
+            PI / 2.0
+        };
+        let (na, nphi) = (1500, 720);
+        let (da, dphi) = (alpha_max / na as f64, 2.0 * PI / nphi as f64);
+        let mut sum = 0.0;
+        for i in 0..na {
+            let alpha = (i as f64 + 0.5) * da;
+            let (sa, ca) = alpha.sin_cos();
+            let lobe = (ns + 2.0) / (2.0 * PI) * ca.powf(ns) * sa * da * dphi;
+            for k in 0..nphi {
+                let (sp, cp) = ((k as f64 + 0.5) * dphi).sin_cos();
+                let w = r * ca + (t * cp + b * sp) * sa;
+                sum += lobe * w.dot(n).max(0.0);
+            }
+        }
+        sum
+    }
+
+    /// The lobe the local pass applies in the bins (the effective exponent at bin centers, times
+    /// each incident bin's factor) reflects, for every incidence tried, the albedo of the
+    /// material's continuous lobe computed by an independent quadrature (`continuous_albedo`),
+    /// whatever the exponent; so reflection neither creates nor loses energy.
     #[test]
-    fn discrete_lobe_conserves_the_true_albedo_for_any_exponent() {
+    fn discrete_lobe_reflects_the_continuous_lobes_albedo() {
         let bins = Bins::new(128).unwrap();
         let n = DVec3::new(0.3, 0.2, 0.93).normalize();
         let c = bins.cosine_normalization(n);
+        let mut worst: f64 = 0.0;
         for ns in [1.0, 30.0, 1e3, 1e4] {
             let lobe = DiscreteLobe::new(ns, &bins);
             assert!(lobe.exponent <= ns && lobe.exponent > 20.0f64.min(ns) - 1e-9);
             let f = lobe.factors(&bins, n, c);
+            let arriving: Vec<usize> = (0..bins.count)
+                .filter(|&l| -bins.centers[l].dot(n) > 0.0)
+                .collect();
             for (l, inc) in bins.centers.iter().enumerate() {
-                let cos_l = -inc.dot(n);
-                if cos_l <= 0.0 {
-                    assert_eq!(f[l], 0.0);
-                    continue;
+                if -inc.dot(n) <= 0.0 {
+                    assert_eq!(f[l], 0.0, "a bin leaving the front has no factor");
                 }
-                let r = mirror(*inc, n);
-                let albedo: f64 = bins
+            }
+            // Every 6th arriving bin: grazing to normal incidence.
+            for &l in arriving.iter().step_by(6) {
+                let inc = bins.centers[l];
+                let r = mirror(inc, n);
+                let discrete: f64 = bins
                     .centers
                     .iter()
                     .filter(|d| d.dot(n) > 0.0 && lobe.keeps(r.dot(**d)))
@@ -252,13 +291,18 @@ mod tests {
                         lobe_shape(lobe.exponent, r.dot(*d)) * f[l] * d.dot(n) * bins.omega * c
                     })
                     .sum();
-                let want = directional_albedo(ns, cos_l);
+                let want = continuous_albedo(ns, n, inc);
+                let err = (discrete - want).abs();
+                worst = worst.max(err);
+                // Measured: worst 9.4e-5 (both quadratures' error).
                 assert!(
-                    (albedo - want).abs() < 1e-9 && want <= 1.0 + 1e-9,
-                    "ns {ns}: {albedo} vs {want}"
+                    err < 3e-4 && discrete <= 1.0 + 1e-9,
+                    "ns {ns}, cos θ {:.3}: discrete {discrete} vs continuous {want}",
+                    -inc.dot(n)
                 );
             }
         }
+        println!("discrete lobe vs continuous albedo: worst {worst:.2e}");
     }
 
     #[test]

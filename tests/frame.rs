@@ -141,15 +141,35 @@ fn report(name: &str, a: &Image, b: &Image) -> f64 {
 fn gpu_and_cpu_frames_agree() {
     let mut s = lit_scene();
     let cpu = run(&s, Backend::Cpu, 256);
-    for (p, limit) in [(Precision::F32, 1e-4), (Precision::F16, 1e-3)] {
+    // Measured (lavapipe), relative MSE: 3.15e-5 in float32 and in float16 tables accumulated in
+    // float32, 3.88e-5 with float16 accumulation (truncating). Residuals relative to the CPU's:
+    // 1.4e-7 (float32), 1.1e-4 (float16 tables), 1.6e-2 (float16 accumulation); the float32 bound
+    // allows another device's float32 arithmetic.
+    for p in [Precision::F32, Precision::F16] {
         s.solver.precision = p;
         let gpu = run(&s, Backend::Gpu, 256);
+        let limit = gpu_bound(&gpu, 1e-4, 1.2e-4);
         let e = report(&format!("lit scene {p:?}"), &gpu.image, &cpu.image);
         assert!(e < limit, "{p:?}: relMSE {e:.3e} ≥ {limit:.0e}");
         assert_eq!(gpu.stats.residuals.len(), 3);
-        for (g, c) in gpu.stats.residuals.iter().zip(&cpu.stats.residuals) {
-            assert!((g - c).abs() < 0.02 * c + 1e-6, "residuals {g} vs {c}");
-        }
+        let worst = gpu
+            .stats
+            .residuals
+            .iter()
+            .zip(&cpu.stats.residuals)
+            .map(|(g, c)| (g - c).abs() / c)
+            .fold(0.0, f64::max);
+        println!("lit scene {p:?}: residuals within {worst:.2e} of the CPU's");
+        let limit = match p {
+            Precision::F32 => 1e-5,
+            _ => gpu_bound(&gpu, 3.2e-4, 5e-2),
+        };
+        assert!(
+            worst < limit,
+            "residuals {:?} vs {:?}",
+            gpu.stats.residuals,
+            cpu.stats.residuals
+        );
     }
     let mut s = load_scene(Path::new("scenes/cornell-box-glossy.toml")).unwrap();
     s.camera.width = 64;
@@ -183,9 +203,45 @@ fn per_pixel(view: &View, x: u32, y: u32, f: impl Fn(DVec3) -> Option<f64>) -> O
 }
 
 /// A lone plane (no interreflection) under one light: every pixel shows kd/π · E with E the
-/// analytic irradiance (cosine, inverse square, spot fall-off), on both backends.
+/// analytic irradiance (cosine, inverse square, spot fall-off), on both backends. No iterations,
+/// float32 tables: only direct light is drawn. `bounds[light]` bounds the worst pixel on the CPU,
+/// on the GPU, and on the GPU with float16 accumulation (see `common::gpu_bound`).
 #[test]
 fn direct_light_on_a_plane_matches_analytic_irradiance() {
+    // Measured: CPU 3.7e-8, 5.8e-8, 5.6e-8 (directional, point, spot: the f32 image's rounding);
+    // GPU 3.7e-8, 7.7e-7, 3.9e-3 (the spot's fall-off). Bounds 3× those, at least 1e-5 on the
+    // GPU for another device's float32 arithmetic.
+    direct_light_on_a_plane(
+        None,
+        [
+            [2e-7, 1e-5, 1e-5],
+            [2e-7, 1e-5, 1e-5],
+            [2e-7, 1.2e-2, 1.2e-2],
+        ],
+    );
+}
+
+/// The same at the default settings (128 bins, τ = 1, the relative element size, 4 iterations,
+/// float16 tables): the iterations add what the plane's coplanar links leak into it (the bins'
+/// Gaussian spreading of grazing light, a known limit; the exact answer is still kd/π·E, so a
+/// fix of the leak tightens these bounds). Measured on both backends (and with float16
+/// accumulation): 0.81% directional, 3.6% point, 4.1% spot; bounds 1.5× (a deterministic bias of
+/// the discretization, not rounding).
+#[test]
+fn direct_light_on_a_plane_with_the_default_iterations() {
+    direct_light_on_a_plane(
+        Some(4),
+        [
+            [1.2e-2, 1.2e-2, 1.2e-2],
+            [5.4e-2, 5.4e-2, 5.4e-2],
+            [6.2e-2, 6.2e-2, 6.2e-2],
+        ],
+    );
+}
+
+/// [`direct_light_on_a_plane_matches_analytic_irradiance`] with `iterations` at the default
+/// settings (`None`: 0 iterations at 32 bins in float32).
+fn direct_light_on_a_plane(iterations: Option<usize>, bounds: [[f64; 3]; 3]) {
     let kd = 0.5;
     let half = 3.0;
     let lights = [
@@ -205,7 +261,7 @@ fn direct_light_on_a_plane_matches_analytic_irradiance() {
             beam_width: 18f64.to_radians(),
         },
     ];
-    for light in lights {
+    for (light, bounds) in lights.into_iter().zip(bounds) {
         let mut s = Scene::empty();
         let m = s.add_material(Material::diffuse("plane", kd));
         quad(
@@ -225,12 +281,15 @@ fn direct_light_on_a_plane_matches_analytic_irradiance() {
         s.camera.width = 48;
         s.camera.height = 48;
         s.camera.fov_y_deg = 60.0;
-        s.solver.bins = 32;
-        s.solver.element_size = 1.0;
-        // No iterations: only direct light is drawn. (Propagated light would add a few percent
-        // here: Gaussian spreading of coplanar links leaks grazing light into the plane.)
-        s.solver.iterations = 0;
-        s.solver.precision = Precision::F32;
+        if let Some(n) = iterations {
+            default_solver(&mut s, n);
+        } else {
+            s.solver.bins = 32;
+            s.solver.element_size = 1.0;
+            // No iterations: only direct light is drawn.
+            s.solver.iterations = 0;
+            s.solver.precision = Precision::F32;
+        }
         let view = View::new(&s.camera);
         let irradiance = |p: DVec3| -> f64 {
             match &light {
@@ -286,13 +345,19 @@ fn direct_light_on_a_plane_matches_analytic_irradiance() {
                 }
             }
             println!(
-                "{} {backend:?}: {checked} pixels, worst {worst:.4}",
-                light.kind()
+                "{} {backend:?} ({} iterations): {checked} pixels, worst {worst:.2e}",
+                light.kind(),
+                s.solver.iterations
             );
             assert!(checked > 1000);
+            let bound = if backend == Backend::Gpu {
+                gpu_bound(&r, bounds[1], bounds[2])
+            } else {
+                bounds[0]
+            };
             assert!(
-                worst < 0.01,
-                "{} {backend:?}: worst {worst:.4}",
+                worst < bound,
+                "{} {backend:?}: worst {worst:.2e} ≥ {bound:.1e}",
                 light.kind()
             );
         }
@@ -344,18 +409,39 @@ fn camera_orientation_left_is_left_and_up_is_up() {
         );
         // The front face is the counter-clockwise side, seen from the camera: radiance 1.
         let peak = r.image.pixels.iter().map(|p| p[0]).fold(0.0, f32::max);
+        println!("{backend:?}: Ke = 1 seen as {peak}");
         assert!((peak - 1.0).abs() < 1e-4, "{backend:?}: Ke seen as {peak}");
     }
 }
 
-/// Closed uniform box (Le, ρ, occluder inside) rendered from inside: Le/(1−ρ) in every pixel.
+/// Closed uniform box (Le, ρ, occluder inside) rendered from inside: Le/(1−ρ) in every pixel
+/// (128 bins, elements 0.25, τ = 0.25, 12 iterations, float32). Measured on both backends:
+/// worst pixel 0.640%, mean −0.011%.
 #[test]
 fn closed_uniform_box_shows_le_over_one_minus_rho_everywhere() {
-    let (rho, le) = (0.4, 1.0);
-    let mut s = uniform_enclosure(rho, le, 128, 0.25);
+    let mut s = uniform_enclosure(0.4, 1.0, 128, 0.25);
     s.solver.oracle = 0.25;
     s.solver.iterations = 12;
     s.solver.precision = Precision::F32;
+    closed_uniform_box(s, [(1e-2, 3.3e-4); 3]);
+}
+
+/// The same box at the default settings (128 bins, τ = 1: cluster links and push/pull, the
+/// relative element size 0.125, float16 tables; 8 iterations, 0.4⁸ = 7e-4 from converged). The
+/// error is the discretization's energy at cluster links (issue 17; tighten when it is fixed).
+/// Measured: worst pixel 5.73% (CPU), 5.72% (GPU), 6.43% (float16 accumulation); mean −1.85%,
+/// −1.86%, −2.65%. Bounds 1.5× (a bias of the discretization).
+#[test]
+fn closed_uniform_box_at_the_default_settings() {
+    let mut s = uniform_enclosure(0.4, 1.0, 128, 0.25);
+    default_solver(&mut s, 8);
+    closed_uniform_box(s, [(8.6e-2, 2.8e-2), (8.6e-2, 2.8e-2), (9.6e-2, 4e-2)]);
+}
+
+/// Renders the box from inside on both backends; `bounds` on the worst pixel's relative
+/// difference from Le/(1−ρ) and on the mean's: CPU, GPU, GPU with float16 accumulation.
+fn closed_uniform_box(mut s: Scene, bounds: [(f64, f64); 3]) {
+    let (rho, le) = (0.4, 1.0);
     s.camera.eye = DVec3::new(0.5, 0.6, 0.95);
     s.camera.target = DVec3::new(0.45, 0.35, 0.0);
     s.camera.fov_y_deg = 70.0;
@@ -364,18 +450,35 @@ fn closed_uniform_box_shows_le_over_one_minus_rho_everywhere() {
     let want = le / (1.0 - rho);
     for backend in [Backend::Cpu, Backend::Gpu] {
         let r = run(&s, backend, 64);
-        let worst = r
+        let errors: Vec<f64> = r
             .image
             .pixels
             .iter()
             .flatten()
-            .map(|&v| (v as f64 - want).abs() / want)
-            .fold(0.0, f64::max);
-        println!("{backend:?}: worst pixel {:.3}%", worst * 100.0);
+            .map(|&v| (v as f64 - want) / want)
+            .collect();
+        let worst = errors.iter().fold(0.0f64, |m, e| m.max(e.abs()));
+        let mean = errors.iter().sum::<f64>() / errors.len() as f64;
+        println!(
+            "{backend:?} ({}, τ = {}, elements {}): worst pixel {:.3}%, mean {:+.3}%",
+            r.stats.precision,
+            s.solver.oracle,
+            s.solver.element_size,
+            worst * 100.0,
+            mean * 100.0
+        );
+        let (bound, mean_bound) = match backend {
+            Backend::Gpu if accumulated_f16(r.stats.precision, &r.stats.fallbacks) => bounds[2],
+            Backend::Gpu => bounds[1],
+            _ => bounds[0],
+        };
         assert!(
-            worst < 0.02,
-            "{backend:?}: worst pixel off by {:.2}%",
-            worst * 100.0
+            worst < bound && mean.abs() < mean_bound,
+            "{backend:?}: worst pixel off by {:.2}%, mean by {:.3}% (bounds {:.2}%, {:.3}%)",
+            worst * 100.0,
+            mean * 100.0,
+            bound * 100.0,
+            mean_bound * 100.0
         );
     }
 }
@@ -386,10 +489,13 @@ fn closed_uniform_box_shows_le_over_one_minus_rho_everywhere() {
 #[test]
 fn bundled_scenes_match_golden_images() {
     let update = std::env::var("UPDATE_GOLDENS").is_ok_and(|v| v == "1");
-    for (name, width, height, limit_cpu, limit_gpu) in [
-        ("cornell-box", 96, 96, 1e-6, 2e-3),
-        ("cornell-box-glossy", 96, 96, 1e-6, 2e-3),
-        ("mnroom", 96, 72, 1e-6, 2e-3),
+    // Measured relative MSE, CPU / GPU / GPU with float16 accumulation: Cornell box 2.2e-7 /
+    // 1.56e-4 / 1.95e-4, glossy 1.1e-8 / 8.0e-5 / 8.0e-5, MNRoom 2.8e-9 / 1.3e-6 / 1.3e-6; bounds
+    // about 3× those.
+    for (name, width, height, limit_cpu, limit_gpu, limit_f16) in [
+        ("cornell-box", 96, 96, 7e-7, 5e-4, 6e-4),
+        ("cornell-box-glossy", 96, 96, 4e-8, 2.4e-4, 2.4e-4),
+        ("mnroom", 96, 72, 1e-8, 4e-6, 4e-6),
     ] {
         let path = format!("tests/golden/{name}.exr");
         let s = load_scene(Path::new(&format!("scenes/{name}.toml"))).unwrap();
@@ -413,12 +519,16 @@ fn bundled_scenes_match_golden_images() {
             continue;
         }
         let golden = Image::read_exr(Path::new(&path)).unwrap();
-        for (backend, limit) in [(Backend::Cpu, limit_cpu), (Backend::Gpu, limit_gpu)] {
+        for backend in [Backend::Cpu, Backend::Gpu] {
             let r = render_checked(name, &s, golden_options(backend));
+            let limit = match backend {
+                Backend::Gpu => gpu_bound(&r, limit_gpu, limit_f16),
+                _ => limit_cpu,
+            };
             let e = report(&format!("{name} {backend:?}"), &r.image, &golden);
             assert!(
                 e < limit,
-                "{name} {backend:?}: relMSE {e:.3e} ≥ {limit:.0e}"
+                "{name} {backend:?}: relMSE {e:.3e} ≥ {limit:.1e}"
             );
         }
     }

@@ -56,6 +56,36 @@ fn uniform_enclosure_with_occluder_converges_to_le_over_one_minus_rho() {
     }
 }
 
+/// The same box with cluster links: τ = 1 (the default) and τ = 0.25, 256 bins, elements 0.2.
+/// The discretization is no longer exact (cluster links spread and lose a little energy), so the
+/// per-element error is a range; measured −1.7% … +1.1% (τ = 1) and −0.45% … +0.88% (τ = 0.25),
+/// bounds 1.5× (a bias of the discretization: tighten when cluster links conserve energy).
+#[test]
+fn uniform_enclosure_with_cluster_links_stays_within_its_measured_range() {
+    for (tau, lo, hi) in [(1.0, -2.6e-2, 1.7e-2), (0.25, -6.8e-3, 1.3e-2)] {
+        let (rho, le) = (0.4, 1.0);
+        let mut scene = uniform_enclosure(rho, le, 256, 0.2);
+        scene.solver.oracle = tau;
+        let sys = System::build(&scene).unwrap();
+        let mut solver = CpuSolver::new(&sys);
+        converge(&mut solver, Scheme::Symmetric, 1e-9, 400);
+        let want = le / (1.0 - rho);
+        let (mut min, mut max) = (f64::MAX, f64::MIN);
+        for li in 0..sys.leaves.len() {
+            let e = (solver.radiosity(li).x / PI - want) / want;
+            min = min.min(e);
+            max = max.max(e);
+        }
+        println!(
+            "τ = {tau}: {} links, elements {:+.2}% … {:+.2}% from Le/(1−ρ)",
+            sys.links.len(),
+            min * 100.0,
+            max * 100.0
+        );
+        assert!(min > lo && max < hi, "τ = {tau}: {min:.4} … {max:.4}");
+    }
+}
+
 /// Flux from a unit emitter (radiance 1) into a black receiver after one propagation.
 fn exchanged_flux(emitter: [DVec3; 4], receiver: [DVec3; 4]) -> f64 {
     let mut s = Scene::empty();
@@ -110,7 +140,8 @@ fn perpendicular_unit_squares_exchange_the_analytic_flux() {
     );
 }
 
-/// The paper reports < 1e-4 between the schemes on its office after 300 iterations.
+/// Both schemes have the same fixed point (the paper reports < 1e-4 between them on its office
+/// after 300 iterations).
 #[test]
 fn symmetric_and_asymmetric_schemes_agree_on_the_cornell_box() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.toml");
@@ -141,8 +172,11 @@ fn symmetric_and_asymmetric_schemes_agree_on_the_cornell_box() {
         .zip(&b.i_total.data)
         .map(|(x, y)| (*x - *y).abs().max_element())
         .fold(0.0, f64::max);
+    println!("schemes differ by {:.2e} of the maximum", worst / max);
+    // Measured 2.2e-12 after converging both to a residual of 1e-12 (the paper: < 1e-4 after 300
+    // iterations on its office).
     assert!(
-        worst / max < 1e-4,
+        worst / max < 1e-11,
         "schemes differ by {:.2e} of the maximum",
         worst / max
     );

@@ -74,18 +74,29 @@ fn stiff_enclosures_iterate_to_the_tolerance_or_say_they_stopped() {
             .map(|&v| (v as f64 - want).abs() / want)
             .fold(0.0, f64::max);
         let estimate = r.stats.estimated_error.unwrap();
+        // n iterations from the emission sum the Neumann series to ρⁿ: every pixel is
+        // (1 − ρⁿ⁺¹)/(1 − ρ), ρⁿ⁺¹ below the answer (all links leaf to leaf, so the discrete
+        // system is exact here).
+        let partial = rho.powi(r.stats.iterations as i32 + 1);
+        let off_series = (worst - partial).abs() / partial;
         println!(
-            "{name} {backend:?}: worst pixel {:.3}% from 1/(1−ρ)",
-            worst * 100.0
+            "{name} {backend:?}: {} iterations, worst pixel {:.3}% from 1/(1−ρ), ρⁿ⁺¹ = {:.3}%: {off_series:.2e} of it off the truncated series",
+            r.stats.iterations,
+            worst * 100.0,
+            partial * 100.0
+        );
+        // Measured: 9.0e-5 (CPU, ρ = 0.99), 1.1e-8 (CPU, ρ = 0.999), 1.3e-6 (GPU, float32 tables:
+        // the bound allows another device's float32 arithmetic over 459 iterations).
+        let limit = if backend == Backend::Gpu { 1e-5 } else { 3e-4 };
+        assert!(
+            off_series < limit,
+            "{off_series:.2e} of ρⁿ⁺¹ off the series"
         );
         if r.stats.iterations < cap {
             assert!(r.stats.warnings.is_empty());
             assert!(estimate <= tolerance, "{estimate}");
-            // The error estimate bounds the real error (plus f32 rounding on the GPU).
-            assert!(
-                worst < 2.0 * estimate + 1e-3,
-                "{worst} vs estimate {estimate}"
-            );
+            // The error estimate bounds the real error (measured: within 1% of it).
+            assert!(worst < 1.05 * estimate, "{worst} vs estimate {estimate}");
         } else {
             let w = r.stats.warnings.join(" ");
             assert!(
@@ -154,7 +165,13 @@ fn emitters_from_1e_minus_4_to_1e6_scale_linearly() {
                 e
             );
             // The GPU's power-of-two scale leaves float16 rounding a different mantissa per Le.
-            let limit = if backend == Backend::Gpu { 5e-3 } else { 1e-6 };
+            // Measured: CPU ≤ 1.05e-7 (the f32 image), GPU ≤ 9.3e-4, with float16 accumulation
+            // (truncating) ≤ 1.5e-3.
+            let limit = if backend == Backend::Gpu {
+                gpu_bound(&r, 3e-3, 4.5e-3)
+            } else {
+                4e-7
+            };
             assert!(e < limit, "{backend:?} Le={le}: {e}");
             assert!(r.stats.fallbacks.iter().all(|f| !f.contains("overflow")));
         }
@@ -203,7 +220,13 @@ fn images_are_scale_invariant() {
             );
             let e = worst_relative(&r, &unit, 1.0);
             println!("scale {scale:e} {backend:?}: worst pixel {e:.2e} from scale 1");
-            assert!(e < 1e-2, "{backend:?} scale {scale}: {e}");
+            // Measured: CPU 3.1e-4, GPU 5.9e-4 (scale 1 float16, the others float32 by range),
+            // with float16 accumulation (truncating) at scale 1 5.4e-3.
+            let limit = match backend {
+                Backend::Gpu => gpu_bound(&unit, 1.8e-3, 1.6e-2),
+                _ => 1.2e-3,
+            };
+            assert!(e < limit, "{backend:?} scale {scale}: {e}");
         }
     }
 }
@@ -282,7 +305,8 @@ fn nearly_touching_and_coplanar_surfaces_stay_bounded() {
         .fold(0.0, f64::max)
         / peak;
     println!("touching/coplanar: GPU vs CPU I_total, worst {e:.2e} of the largest texel");
-    assert!(e < 0.01, "{e}");
+    // Measured 4.7e-4 (float16 tables), with float16 accumulation (truncating) 8.4e-3.
+    assert!(e < gpu_bound(&g, 1.5e-3, 2.5e-2), "{e}");
 }
 
 /// Phong exponents up to 1e4 in a closed box: the lobe as the bins sample it conserves the
@@ -329,8 +353,10 @@ fn near_mirror_phong_up_to_1e4_converges_with_bounded_energy() {
             .fold(0.0, f64::max);
         let bound = 1.0 / (1.0 - 0.99);
         println!("Phong ns={ns:e}: residual {r:.2e} after 60 iterations, brightest bin {worst:.3} (bound {bound:.0}), flux {:.4}", solver.exitant_flux());
-        assert!(r < 1e-6, "ns {ns}: residual {r}");
-        assert!(worst < bound && worst.is_finite(), "ns {ns}: {worst}");
+        // Measured: residual 5.8e-11 … 6.3e-11, brightest bin 1.070 … 1.071 (the lamp's 1 plus
+        // what it reflects), far under the energy bound.
+        assert!(r < 2e-10, "ns {ns}: residual {r}");
+        assert!(worst < bound && worst < 1.6, "ns {ns}: {worst}");
     }
     let mut s = build(1e4);
     s.solver.iterations = 8;
@@ -345,7 +371,9 @@ fn near_mirror_phong_up_to_1e4_converges_with_bounded_energy() {
     let g = render_with("Phong 1e4", &s, Backend::Gpu);
     let e = worst_relative(&g, &c, 1.0);
     println!("Phong 1e4: GPU vs CPU worst pixel {e:.2e}");
-    assert!(e < 0.1, "{e}");
+    // Measured 2.0e-6 (float32 tables: the albedo 0.99 gain rules out float16), allowing another
+    // device's float32 arithmetic.
+    assert!(e < 1e-5, "{e}");
 }
 
 /// 1024 bins, a single element, and elements spanning six orders of magnitude in area: both
@@ -361,11 +389,10 @@ fn extreme_discretizations_run_on_both_backends() {
     s.solver.iterations = 2;
     let c = render_with("1024 bins", &s, Backend::Cpu);
     let g = render_with("1024 bins", &s, Backend::Gpu);
-    println!(
-        "1024 bins: GPU vs CPU worst pixel {:.2e}",
-        worst_relative(&g, &c, 1.0)
-    );
-    assert!(worst_relative(&g, &c, 1.0) < 0.05);
+    let e = worst_relative(&g, &c, 1.0);
+    println!("1024 bins: GPU vs CPU worst pixel {e:.2e}");
+    // Measured 5.6e-4 (float16 tables), with float16 accumulation (truncating) 2.5e-3.
+    assert!(e < gpu_bound(&g, 1.7e-3, 7.4e-3), "{e}");
 
     // A single element: one emitting triangle under an environment.
     let mut s = Scene::empty();
@@ -395,9 +422,11 @@ fn extreme_discretizations_run_on_both_backends() {
         .flatten()
         .cloned()
         .fold(0.0f32, f32::max);
-    println!("single element: brightest pixel {brightest} (2.25 expected)");
-    assert!((brightest - 2.25).abs() < 0.02, "{brightest}");
-    assert!(worst_relative(&g, &c, 1.0) < 0.01);
+    let e = worst_relative(&g, &c, 1.0);
+    println!("single element: brightest pixel {brightest} (2.25 expected); GPU vs CPU {e:.2e}");
+    // Measured: exactly 2.25; GPU vs CPU 6.2e-5 (float16 tables, either accumulation).
+    assert!((brightest - 2.25).abs() < 1e-5, "{brightest}");
+    assert!(e < 1.9e-4, "{e}");
 
     // Areas over six orders: a 200×200 floor in two triangles, a 0.3-unit triangle on it.
     let mut s = Scene::empty();
@@ -427,6 +456,7 @@ fn extreme_discretizations_run_on_both_backends() {
     let g = render_with("six orders of area", &s, Backend::Gpu);
     let e = worst_relative(&g, &c, 1.0);
     println!("six orders of area: GPU vs CPU worst pixel {e:.2e}");
-    assert!(e < 0.02, "{e}");
+    // Measured 3.1e-7 (float32 tables by range), allowing another device's float32 arithmetic.
+    assert!(e < 1e-5, "{e}");
     let _ = Precision::F16;
 }

@@ -41,11 +41,33 @@ pub enum BlendRounding {
     TowardZero,
 }
 
-/// Adds 0.7 a hundred times into one float16 texel: 69.44 with round-to-nearest, 68.94 with
-/// truncation (exact: 70).
+/// The probe's sum on a device that rounds float16 blending to nearest (69 + 7/16).
+pub const PROBE_SUM_NEAREST: f32 = 69.4375;
+/// The probe's sum on a device that truncates float16 blending toward zero (68 + 15/16).
+pub const PROBE_SUM_TOWARD_ZERO: f32 = 68.9375;
+
+/// What the probe's `sum` (0.7 added a hundred times into one float16 texel; exact: 70) says
+/// about the device: [`PROBE_SUM_NEAREST`] or anything closer to 70 is [`BlendRounding::Nearest`];
+/// [`PROBE_SUM_TOWARD_ZERO`], anything else below the midpoint, or a non-number is
+/// [`BlendRounding::TowardZero`] (the safe answer: the solver then accumulates in float32).
+pub fn classify_blend_sum(sum: f32) -> BlendRounding {
+    if sum > 69.2 {
+        BlendRounding::Nearest
+    } else {
+        BlendRounding::TowardZero
+    }
+}
+
+/// Adds 0.7 a hundred times into one float16 texel with additive blending and classifies the sum
+/// ([`classify_blend_sum`]).
 pub fn f16_blend_rounding(ctx: &Arc<Context>) -> Result<BlendRounding> {
+    Ok(classify_blend_sum(f16_blend_sum(ctx)?))
+}
+
+/// The probe's sum: 0.7 added a hundred times into one float16 texel by additive blending.
+pub fn f16_blend_sum(ctx: &Arc<Context>) -> Result<f32> {
     let layout = TableLayout::new(1, 1, ctx.info.max_image_dimension)?;
-    let spans = vec![(0, 0, 1); PROBE_ADDITIONS];
+    let spans = vec![(0, 0, 1); 100];
     let sum = draw_lines(
         ctx,
         &layout,
@@ -53,20 +75,7 @@ pub fn f16_blend_rounding(ctx: &Arc<Context>) -> Result<BlendRounding> {
         "probe.frag",
         vk::Format::R16G16B16A16_SFLOAT,
     )?[0];
-    Ok(classify_probe(sum))
-}
-
-/// Additions of 0.7 the probe makes into one float16 texel.
-pub const PROBE_ADDITIONS: usize = 100;
-
-/// What the probe's sum says: 69.44 after round-to-nearest additions, 68.94 after truncating
-/// ones (exact: 70); the threshold lies between them.
-pub fn classify_probe(sum: f32) -> BlendRounding {
-    if sum > 69.2 {
-        BlendRounding::Nearest
-    } else {
-        BlendRounding::TowardZero
-    }
+    Ok(sum)
 }
 
 fn draw_lines(
@@ -145,34 +154,40 @@ fn draw_lines(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use half::f16;
 
-    /// The classifier on both behaviours, with the sums each rounding gives (computed here on
-    /// the CPU with `half`, independently of any device).
+    /// Float16 addition of `a + b` rounded to nearest or truncated toward zero.
+    fn add(a: f16, b: f16, truncate: bool) -> f16 {
+        let exact = a.to_f64() + b.to_f64();
+        let r = f16::from_f64(exact);
+        if truncate && r.to_f64().abs() > exact.abs() {
+            f16::from_bits(r.to_bits() - 1)
+        } else {
+            r
+        }
+    }
+
+    /// The two sums the probe tells apart, from a software float16 accumulator with each
+    /// rounding, and the decision on both (and on what a broken probe could return).
     #[test]
-    fn the_probe_tells_rounding_from_truncation() {
-        use half::f16;
-        let add = |truncate: bool| {
-            let mut s = f16::from_f32(0.0);
-            for _ in 0..PROBE_ADDITIONS {
-                let exact = s.to_f64() + f16::from_f32(0.7).to_f64();
-                s = if truncate {
-                    // Toward zero: the largest float16 not above the exact (positive) sum.
-                    let r = f16::from_f64(exact);
-                    if r.to_f64() > exact {
-                        f16::from_bits(r.to_bits() - 1)
-                    } else {
-                        r
-                    }
-                } else {
-                    f16::from_f64(exact)
-                };
+    fn probe_sums_classify_both_behaviours() {
+        for (truncate, want_sum, want) in [
+            (false, PROBE_SUM_NEAREST, BlendRounding::Nearest),
+            (true, PROBE_SUM_TOWARD_ZERO, BlendRounding::TowardZero),
+        ] {
+            let mut s = f16::ZERO;
+            for _ in 0..100 {
+                s = add(s, f16::from_f32(0.7), truncate);
             }
-            s.to_f32()
-        };
-        let (nearest, truncated) = (add(false), add(true));
-        assert!((nearest - 69.44).abs() < 0.01, "{nearest}");
-        assert!((truncated - 68.94).abs() < 0.01, "{truncated}");
-        assert_eq!(classify_probe(nearest), BlendRounding::Nearest);
-        assert_eq!(classify_probe(truncated), BlendRounding::TowardZero);
+            assert_eq!(s.to_f32(), want_sum, "truncate {truncate}");
+            assert_eq!(classify_blend_sum(s.to_f32()), want);
+        }
+        assert_eq!(classify_blend_sum(69.44), BlendRounding::Nearest);
+        assert_eq!(classify_blend_sum(68.94), BlendRounding::TowardZero);
+        // Exact accumulation (a device blending at higher precision) is as good as nearest.
+        assert_eq!(classify_blend_sum(70.0), BlendRounding::Nearest);
+        for broken in [0.0, 0.7, 64.0, f32::NAN] {
+            assert_eq!(classify_blend_sum(broken), BlendRounding::TowardZero);
+        }
     }
 }

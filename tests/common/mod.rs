@@ -128,6 +128,11 @@ pub fn render_checked(
     let ctx = gpu.then(context);
     let options = antiradiance::Options {
         context: ctx.clone(),
+        gpu: antiradiance::engine::GpuTuning {
+            force_table_accumulation: options.gpu.force_table_accumulation
+                || force_f16_accumulation(),
+            ..options.gpu
+        },
         ..options
     };
     let backend = options.backend;
@@ -165,6 +170,36 @@ pub fn render_checked(
     r
 }
 
+/// `ANTIRADIANCE_TEST_F16_ACCUMULATION=1`: every GPU solve in the tests accumulates L_in and
+/// L_push in float16 tables as on a device that rounds float16 blending. lavapipe truncates float16
+/// blending, so by default the solver accumulates in float32 there and says so in `fallbacks`;
+/// with this set, lavapipe runs the float16 path (with truncation, worse than a rounding device)
+/// and the tests apply their float16-accumulation bounds, which were measured this way.
+pub fn force_f16_accumulation() -> bool {
+    std::env::var("ANTIRADIANCE_TEST_F16_ACCUMULATION").is_ok_and(|v| v == "1")
+}
+
+/// Whether a GPU solve with these `fallbacks` and `precision` accumulated in float16 (a device
+/// that rounds float16 blending, or [`force_f16_accumulation`]); false for float32 tables and
+/// where the solver fell back to float32 accumulation (lavapipe).
+pub fn accumulated_f16(precision: antiradiance::Precision, fallbacks: &[String]) -> bool {
+    precision == antiradiance::Precision::F16
+        && !fallbacks
+            .iter()
+            .any(|f| f.contains("truncates float16 blending"))
+}
+
+/// A bound for a GPU figure: `table` where the tables are float32 or L_in and L_push accumulate
+/// in float32 (lavapipe's fallback), `f16` where they accumulate in float16 (measured on lavapipe
+/// with truncation, [`force_f16_accumulation`]; a device that rounds should stay well inside).
+pub fn gpu_bound(r: &antiradiance::engine::Rendered, table: f64, f16: f64) -> f64 {
+    if accumulated_f16(r.stats.precision, &r.stats.fallbacks) {
+        f16
+    } else {
+        table
+    }
+}
+
 /// Points the camera from `eye` at `target` with a square image of `size` pixels.
 pub fn view(s: &mut Scene, eye: DVec3, target: DVec3, fov: f64, size: u32) {
     s.camera.eye = eye;
@@ -186,4 +221,157 @@ pub fn render_with(
         ..Default::default()
     };
     render_checked(name, scene, options)
+}
+
+/// The solver settings a scene file without a `[solver]` table gets: 128 bins, τ = 1, the scene's
+/// symmetric scheme and float16 tables, and the relative element size
+/// (`RELATIVE_ELEMENT_SIZE` × the bounding-box diagonal). `iterations` is the scene's own.
+pub fn default_solver(s: &mut Scene, iterations: usize) {
+    s.solver = antiradiance::scene::SolverSettings {
+        iterations,
+        ..Default::default()
+    };
+    let (lo, hi) = s.bounds();
+    s.solver.element_size = antiradiance::scene::RELATIVE_ELEMENT_SIZE * (hi - lo).length();
+}
+
+/// A path-traced reference with the pixels that see an emitter (or the environment) marked.
+pub struct Truth {
+    /// The unbiased reference: image, its direct part and its per-pixel standard error.
+    pub reference: antiradiance::reference::Reference,
+    /// Pixels measured: none of their samples saw an emitter directly, nor did their 8
+    /// neighbours' (antiradiance samples a pixel at 2×2 fixed positions, the path tracer at
+    /// random ones, so an emitter's edge is excluded with a margin).
+    pub measured: Vec<bool>,
+}
+
+/// Path-traces `scene` at `spp` samples per pixel (unlimited bounces, Russian roulette) and marks
+/// the pixels that see no emitter (from a 0-bounce trace at 64 spp).
+pub fn path_traced(scene: &Scene, spp: u32) -> Truth {
+    use antiradiance::reference::{render_reference, ReferenceOptions};
+    let silent = &antiradiance::progress::Silent;
+    let t = std::time::Instant::now();
+    let reference = render_reference(
+        scene,
+        &ReferenceOptions {
+            spp,
+            max_bounces: None,
+            seed: 21,
+        },
+        silent,
+    )
+    .unwrap();
+    let seen = render_reference(
+        scene,
+        &ReferenceOptions {
+            spp: 64,
+            max_bounces: Some(0),
+            seed: 22,
+        },
+        silent,
+    )
+    .unwrap();
+    let (w, h) = (seen.image.width as i64, seen.image.height as i64);
+    let lit = |x: i64, y: i64| {
+        x >= 0
+            && y >= 0
+            && x < w
+            && y < h
+            && seen.image.pixels[(y * w + x) as usize]
+                .iter()
+                .any(|&v| v > 0.0)
+    };
+    let measured = (0..h)
+        .flat_map(|y| (0..w).map(move |x| (x, y)))
+        .map(|(x, y)| !(-1..=1).any(|dy| (-1..=1).any(|dx| lit(x + dx, y + dy))))
+        .collect();
+    println!(
+        "reference: {spp} spp in {:.1} s, standard error {:.2}% of the image mean",
+        t.elapsed().as_secs_f64(),
+        100.0 * reference.stats.mean_relative_std_error.unwrap_or(0.0)
+    );
+    Truth {
+        reference,
+        measured,
+    }
+}
+
+/// Error of an image against a [`Truth`], over its measured pixels.
+#[derive(Debug, Clone, Copy)]
+pub struct Measured {
+    /// Pixels measured.
+    pub pixels: usize,
+    /// RMSE over pixels and channels divided by the reference's mean over the same.
+    pub rel_rmse: f64,
+    /// What the reference's own noise contributes to `rel_rmse`: √(mean σ²) / mean.
+    pub noise: f64,
+    /// The image's mean over the reference's, minus 1 (the bias of the whole image).
+    pub mean_bias: f64,
+    /// Pixels reached only by indirect light (the reference's direct part is zero there).
+    pub indirect_pixels: usize,
+    /// Median and 90th percentile of |x − r| / r (luminance) over those pixels.
+    pub indirect_median: f64,
+    pub indirect_p90: f64,
+}
+
+impl std::fmt::Display for Measured {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "relative RMSE {:.4} over {} pixels (reference noise {:.4}), mean {:+.2}%; indirect-only pixels {}: median {:.1}%, 90th percentile {:.1}%",
+            self.rel_rmse,
+            self.pixels,
+            self.noise,
+            100.0 * self.mean_bias,
+            self.indirect_pixels,
+            100.0 * self.indirect_median,
+            100.0 * self.indirect_p90
+        )
+    }
+}
+
+/// Measures `image` against `truth` (see [`Measured`]).
+pub fn measure(image: &antiradiance::frame::Image, truth: &Truth) -> Measured {
+    let r = &truth.reference;
+    let sigma = r
+        .std_error
+        .as_ref()
+        .expect("a reference of more than 1 spp");
+    let lum = |p: [f32; 3]| antiradiance::metrics::luminance(p) as f64;
+    let (mut n, mut sq, mut sum_r, mut sum_x, mut var) = (0usize, 0.0, 0.0, 0.0, 0.0);
+    let mut indirect = Vec::new();
+    for i in 0..r.image.pixels.len() {
+        if !truth.measured[i] {
+            continue;
+        }
+        let (x, y, s) = (image.pixels[i], r.image.pixels[i], sigma.pixels[i]);
+        for c in 0..3 {
+            sq += (x[c] as f64 - y[c] as f64).powi(2);
+            sum_r += y[c] as f64;
+            sum_x += x[c] as f64;
+            var += (s[c] as f64).powi(2);
+        }
+        n += 1;
+        if lum(r.direct.pixels[i]) == 0.0 && lum(y) > 0.0 {
+            indirect.push((lum(x) - lum(y)).abs() / lum(y));
+        }
+    }
+    assert!(n > 0, "no pixel to measure");
+    let mean = sum_r / (3 * n) as f64;
+    indirect.sort_by(f64::total_cmp);
+    let pct = |q: f64| {
+        indirect
+            .get(((indirect.len().max(1) - 1) as f64 * q) as usize)
+            .copied()
+            .unwrap_or(0.0)
+    };
+    Measured {
+        pixels: n,
+        rel_rmse: (sq / (3 * n) as f64).sqrt() / mean,
+        noise: (var / (3 * n) as f64).sqrt() / mean,
+        mean_bias: sum_x / sum_r - 1.0,
+        indirect_pixels: indirect.len(),
+        indirect_median: pct(0.5),
+        indirect_p90: pct(0.9),
+    }
 }

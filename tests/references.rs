@@ -1,0 +1,300 @@
+//! Where antiradiance cancels light, against an independent answer: small scenes with occluders,
+//! solved at the default settings (128 bins, τ = 1, the relative element size, the scene's
+//! iterations) by the CPU solver and by the GPU passes, each image measured against the project's
+//! unbiased path tracer (`src/reference/`) over the pixels that do not see an emitter.
+//!
+//! The bounds are the errors measured on this machine (lavapipe, 2 cores) with a small margin
+//! (see the comment above the tests), so a change that makes the answer worse fails here, and one
+//! that makes it better says so in the printed figure (then tighten the bound). The reference's
+//! own noise is printed beside each figure and asserted to be a small part of the bound, and
+//! each test checks that the solve without antiradiance breaks its bounds.
+
+mod common;
+
+use antiradiance::engine::{Options, Prepared};
+use antiradiance::metrics::relative_errors;
+use antiradiance::scene::{load_scene, Light, Material, Scene};
+use antiradiance::{BackendKind as Backend, Engine};
+use common::*;
+use glam::DVec3;
+use std::path::Path;
+
+/// What a scene's images may be off the path tracer by (both backends), and the GPU image off
+/// the CPU image.
+struct Bounds {
+    /// Relative RMSE (RMSE / mean) over the pixels that see no emitter.
+    rel_rmse: f64,
+    /// |image mean / reference mean − 1| over the same pixels.
+    mean_bias: f64,
+    /// Median relative error of the pixels only indirect light reaches (None: the scene has few).
+    indirect_median: Option<f64>,
+    /// `metrics::relative_errors` of the GPU image against the CPU image, and the same with
+    /// float16 accumulation (`common::gpu_bound`).
+    gpu_vs_cpu: f64,
+    gpu_vs_cpu_f16: f64,
+}
+
+/// Renders `scene` on both backends at its own settings, measures each image against `truth`
+/// and asserts `bounds`; then checks that the bounds discriminate: the CPU solve without
+/// antiradiance (U alone, light through every occluder) must break one of them.
+fn check(name: &str, scene: &Scene, truth: &Truth, bounds: &Bounds) {
+    let within = |m: &Measured| {
+        m.rel_rmse < bounds.rel_rmse
+            && m.mean_bias.abs() < bounds.mean_bias
+            && bounds.indirect_median.is_none_or(|b| m.indirect_median < b)
+    };
+    let mut renders = Vec::new();
+    for backend in [Backend::Cpu, Backend::Gpu] {
+        let t = std::time::Instant::now();
+        let r = render_checked(name, scene, Options::backend(backend));
+        let m = measure(&r.image, truth);
+        println!("{name} {backend}: {m} ({:.1} s)", t.elapsed().as_secs_f64());
+        assert!(
+            m.noise < bounds.rel_rmse / 5.0,
+            "{name}: the reference's noise {:.4} is not small against the bound {}",
+            m.noise,
+            bounds.rel_rmse
+        );
+        assert!(
+            within(&m),
+            "{name} {backend}: {m}; bounds: relative RMSE {}, |mean| {}, indirect median {:?}",
+            bounds.rel_rmse,
+            bounds.mean_bias,
+            bounds.indirect_median
+        );
+        renders.push(r);
+    }
+    let (gpu_vs_cpu, _) = relative_errors(&renders[1].image, &renders[0].image).unwrap();
+    println!("{name}: GPU image vs CPU image, relative RMSE {gpu_vs_cpu:.2e}");
+    let limit = gpu_bound(&renders[1], bounds.gpu_vs_cpu, bounds.gpu_vs_cpu_f16);
+    assert!(
+        gpu_vs_cpu < limit,
+        "{name}: GPU vs CPU {gpu_vs_cpu:.2e} ≥ {limit:.1e}"
+    );
+    let silent = &antiradiance::progress::Silent;
+    let options = Options::backend(Backend::Cpu);
+    let mut prep = Prepared::new(scene, &options, None, silent).unwrap();
+    prep.plan.features.antiradiance = false;
+    let r = Engine::from_prepared(prep, &options, silent)
+        .unwrap()
+        .render(silent)
+        .unwrap();
+    let m = measure(&r.image, truth);
+    println!("{name} cpu without antiradiance: {m}");
+    assert!(
+        !within(&m),
+        "{name}: the bounds do not tell U alone from the solution"
+    );
+}
+
+/// A block resting on a floor in front of a back wall, under a square area emitter.
+fn block_on_floor() -> Scene {
+    let mut s = Scene::empty();
+    let e = s.add_material(Material {
+        ke: DVec3::splat(10.0),
+        ..Material::diffuse("lamp", 0.0)
+    });
+    let f = s.add_material(Material::diffuse("floor", 0.5));
+    let w = s.add_material(Material::diffuse("wall", 0.6));
+    let b = s.add_material(Material::diffuse("block", 0.6));
+    floor(&mut s, 1.0, f);
+    let p = DVec3::new;
+    quad(
+        &mut s,
+        "wall",
+        [
+            p(-1.0, 0.0, -1.0),
+            p(1.0, 0.0, -1.0),
+            p(1.0, 1.5, -1.0),
+            p(-1.0, 1.5, -1.0),
+        ],
+        w,
+    );
+    add_box(
+        &mut s,
+        "block",
+        p(-0.1, 0.0, -0.4),
+        p(0.4, 0.5, 0.1),
+        b,
+        false,
+    );
+    lamp(&mut s, 0.25, 1.5, e);
+    default_solver(&mut s, 8);
+    view(&mut s, p(0.0, 1.3, 2.6), p(0.0, 0.3, 0.0), 50.0, 32);
+    s
+}
+
+/// A black slab above a grey one (albedo 0.5) between a small area emitter and a floor, in front
+/// of a back wall. Both slabs are wider than the emitter's shadow footprint, so the floor under
+/// them is reached only by light reflected from the wall and the floor around them; the
+/// unoccluded transport U sends the emitter's light through both, which antiradiance cancels.
+fn slabs() -> Scene {
+    let mut s = Scene::empty();
+    let e = s.add_material(Material {
+        ke: DVec3::splat(20.0),
+        ..Material::diffuse("lamp", 0.0)
+    });
+    let f = s.add_material(Material::diffuse("floor", 0.5));
+    let w = s.add_material(Material::diffuse("wall", 0.6));
+    let black = s.add_material(Material::diffuse("black slab", 0.0));
+    let grey = s.add_material(Material::diffuse("grey slab", 0.5));
+    floor(&mut s, 1.0, f);
+    let p = DVec3::new;
+    quad(
+        &mut s,
+        "wall",
+        [
+            p(-1.0, 0.0, -1.0),
+            p(1.0, 0.0, -1.0),
+            p(1.0, 1.8, -1.0),
+            p(-1.0, 1.8, -1.0),
+        ],
+        w,
+    );
+    lamp(&mut s, 0.2, 1.8, e);
+    add_box(
+        &mut s,
+        "black",
+        p(-0.45, 1.1, -0.45),
+        p(0.45, 1.14, 0.45),
+        black,
+        false,
+    );
+    add_box(
+        &mut s,
+        "grey",
+        p(-0.45, 0.55, -0.45),
+        p(0.45, 0.59, 0.45),
+        grey,
+        false,
+    );
+    default_solver(&mut s, 8);
+    view(&mut s, p(0.0, 0.6, 2.6), p(0.0, 0.35, 0.0), 50.0, 32);
+    s
+}
+
+/// Three parallel walls (thin closed boxes) on a ground plane make two open-topped corridors;
+/// a directional light falls across them at 50° from the vertical, so both corridor floors are in
+/// full shadow. Light reaches them only after reflection; the unoccluded transport U sends the
+/// lit ground outside through one wall (two faces) into the near corridor and through two walls
+/// (four faces) into the far one, which antiradiance must cancel.
+fn corridors() -> Scene {
+    let mut s = Scene::empty();
+    let g = s.add_material(Material::diffuse("ground", 0.5));
+    let w = s.add_material(Material::diffuse("wall", 0.6));
+    let p = DVec3::new;
+    quad(
+        &mut s,
+        "ground",
+        [
+            p(-1.0, 0.0, 0.4),
+            p(1.0, 0.0, 0.4),
+            p(1.0, 0.0, -0.4),
+            p(-1.0, 0.0, -0.4),
+        ],
+        g,
+    );
+    for (k, x) in [-0.5, 0.0, 0.5].into_iter().enumerate() {
+        add_box(
+            &mut s,
+            &format!("wall{k}"),
+            p(x - 0.02, 0.0, -0.4),
+            p(x + 0.02, 0.8, 0.4),
+            w,
+            false,
+        );
+    }
+    let th = 50f64.to_radians();
+    s.lights = vec![Light::Directional {
+        direction: DVec3::new(th.sin(), -th.cos(), 0.0),
+        irradiance: DVec3::splat(3.0),
+    }];
+    default_solver(&mut s, 8);
+    view(&mut s, p(0.0, 1.5, 1.9), p(0.0, 0.1, -0.2), 45.0, 32);
+    s
+}
+
+// Bounds: the figures measured on this machine (lavapipe; the GPU is within 1e-3 of the CPU
+// figure) times 1.5 for the relative RMSE and the indirect median, 3 for the mean bias (a small
+// difference of two means) and 3 for GPU vs CPU. With float16 accumulation (lavapipe truncating,
+// `ANTIRADIANCE_TEST_F16_ACCUMULATION=1`) the GPU's figures against the path tracer stay inside
+// the same bounds (Cornell box 0.306, mean −3.6%); GPU vs CPU measured 3.9e-3 (block), 4.2e-2
+// (slabs), 5.6e-2 (corridors), 3.0e-2 (Cornell box), bounds 3× those. The errors are bias, not noise (the reference is
+// fixed by its seed, and its noise is printed beside each figure): a change of the method moves
+// them, so when one improves, tighten its bound to the new figure. Area emitters' direct light
+// still goes through the directional bins (issue 17), which is most of the block's and the Cornell
+// box's error.
+
+/// Measured: relative RMSE 0.245 (CPU and GPU), mean −1.3%; GPU vs CPU 1.6e-4. Without
+/// antiradiance: 0.286, mean +6.0%.
+#[test]
+fn block_on_a_floor_under_an_emitter() {
+    let s = block_on_floor();
+    let truth = path_traced(&s, 1024);
+    let bounds = Bounds {
+        rel_rmse: 0.37,
+        mean_bias: 0.038,
+        indirect_median: None,
+        gpu_vs_cpu: 5e-4,
+        gpu_vs_cpu_f16: 1.2e-2,
+    };
+    check("block on a floor", &s, &truth, &bounds);
+}
+
+/// Measured: relative RMSE 0.722, mean +15.9%, and the floor under the slabs (121 pixels reached
+/// only by indirect light) 418% too bright at the median: the stacked occluders leak. The leak
+/// shrinks with the bins (256 bins: 0.35, median 179%) and τ (0.25: 0.49, 276%), not with
+/// iterations or element size, so it is the directional discretization of the cancellation.
+/// GPU vs CPU 2.5e-4. Without antiradiance: 2.31, mean +129%, median 3591%.
+#[test]
+fn black_and_grey_slabs_between_an_emitter_and_a_floor() {
+    let s = slabs();
+    let truth = path_traced(&s, 1024);
+    let bounds = Bounds {
+        rel_rmse: 1.1,
+        mean_bias: 0.24,
+        indirect_median: Some(6.3),
+        gpu_vs_cpu: 8e-4,
+        gpu_vs_cpu_f16: 0.125,
+    };
+    check("slabs", &s, &truth, &bounds);
+}
+
+/// Measured: relative RMSE 0.316, mean −0.9%, the corridor floors (215 pixels reached only by
+/// indirect light) 12.5% off at the median, 48% at the 90th percentile. No setting moves the
+/// relative RMSE (0.314–0.319 for 128/256 bins, τ 1/0.25, elements ×1/×½, 8/24 iterations).
+/// GPU vs CPU 8.0e-4. Without antiradiance: 0.392, mean +10.4%, median 65%.
+#[test]
+fn open_topped_corridors_lit_only_after_reflection() {
+    let s = corridors();
+    let truth = path_traced(&s, 1024);
+    let bounds = Bounds {
+        rel_rmse: 0.48,
+        mean_bias: 0.026,
+        indirect_median: Some(0.19),
+        gpu_vs_cpu: 2.5e-3,
+        gpu_vs_cpu_f16: 0.17,
+    };
+    check("corridors", &s, &truth, &bounds);
+}
+
+/// The bundled default scene at its own settings (128 bins, elements 0.25, τ = 1, 8
+/// iterations), 32×32. Measured: relative RMSE 0.300 (CPU) / 0.301 (GPU), mean −1.9% / −2.0%,
+/// the 215 indirect-only pixels 19.9% off at the median; GPU vs CPU 2.3e-2 (raster against ray
+/// cast at the blocks' edges). Without antiradiance: 0.687, mean +38%, median 100%.
+#[test]
+fn cornell_box_at_low_resolution() {
+    let mut s =
+        load_scene(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.toml")).unwrap();
+    s.camera.width = 32;
+    s.camera.height = 32;
+    let truth = path_traced(&s, 1024);
+    let bounds = Bounds {
+        rel_rmse: 0.46,
+        mean_bias: 0.06,
+        indirect_median: Some(0.30),
+        gpu_vs_cpu: 7e-2,
+        gpu_vs_cpu_f16: 9e-2,
+    };
+    check("cornell box", &s, &truth, &bounds);
+}
