@@ -34,6 +34,6 @@ pub mod system;
 pub use engine::{Engine, Options};
 pub use error::{Error, Result};
 pub use scene::Scene;
-pub use settings::{BackendKind, Precision, Scheme};
+pub use settings::{BackendKind, Method, Precision, Scheme};
 pub use solver::CpuSolver;
 pub use system::System;

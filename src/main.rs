@@ -230,6 +230,7 @@ fn run(cli: Cli) -> Result<()> {
             size,
             exposure,
             backend,
+            method,
             shadow_map_size,
             device,
             plan,
@@ -245,6 +246,7 @@ fn run(cli: Cli) -> Result<()> {
             o.width = size.width;
             o.height = size.height;
             o.backend = backend;
+            o.method = method;
             o.shadow_map_size = shadow_map_size;
             o.device = device;
             let bars = Bars::default();

@@ -114,6 +114,19 @@ pub enum BackendKind {
 }
 spelled!(BackendKind, "backend", [(Gpu, "gpu"), (Cpu, "cpu")]);
 
+/// How global illumination is computed: the paper's method, or a related system measured on
+/// the same scene, frame formation and engine (each is a backend of [`crate::Engine`]).
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, clap::ValueEnum, Default,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// Implicit visibility with antiradiance (the paper).
+    #[default]
+    Antiradiance,
+}
+spelled!(Method, "method", [(Antiradiance, "antiradiance")]);
+
 #[cfg(test)]
 mod tests {
     use super::*;

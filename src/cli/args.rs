@@ -2,7 +2,7 @@
 //! [`Options`]; nothing is written into the scene.
 
 use antiradiance::engine::{Options, SolverOverrides};
-use antiradiance::{BackendKind, Precision, Scheme};
+use antiradiance::{BackendKind, Method, Precision, Scheme};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
 
@@ -78,6 +78,9 @@ pub enum Command {
         /// Which implementation solves and draws.
         #[arg(long, value_enum, default_value_t = BackendKind::Gpu)]
         backend: BackendKind,
+        /// How global illumination is computed.
+        #[arg(long, value_enum, default_value_t = Method::Antiradiance)]
+        method: Method,
         /// Shadow map side in texels.
         #[arg(long, default_value_t = 1024)]
         shadow_map_size: u32,

@@ -8,7 +8,7 @@ use crate::frame::Image;
 use crate::gpu::memory::MemoryReport;
 use crate::gpu::Context;
 use crate::scene::{Precision, Scheme};
-use crate::settings::BackendKind;
+use crate::settings::{BackendKind, Method};
 use crate::solver::convergence::Figures;
 use crate::solver::Table;
 use std::sync::Arc;
@@ -56,20 +56,22 @@ pub trait Backend {
     fn as_gpu(&mut self) -> Option<&mut super::gpu::GpuBackend>;
 }
 
-/// Makes the backend `kind` for `prep`; the GPU backend uses `ctx`.
+/// Makes the backend of `options.method` on `options.backend` for `prep`; GPU backends use
+/// `ctx`.
 pub fn create(
-    kind: BackendKind,
+    options: &super::Options,
     prep: &Prepared,
     ctx: Option<Arc<Context>>,
-    tuning: super::GpuTuning,
 ) -> Result<Box<dyn Backend>> {
-    Ok(match kind {
-        BackendKind::Cpu => Box::new(super::cpu::CpuBackend::new(prep)),
-        BackendKind::Gpu => {
-            let ctx = ctx.ok_or_else(|| {
-                crate::error::Error::Device("the GPU backend needs a Vulkan context".into())
-            })?;
-            Box::new(super::gpu::GpuBackend::new(ctx, prep, tuning)?)
+    let gpu = || {
+        ctx.clone().ok_or_else(|| {
+            crate::error::Error::Device("the GPU backend needs a Vulkan context".into())
+        })
+    };
+    Ok(match (options.method, options.backend) {
+        (Method::Antiradiance, BackendKind::Cpu) => Box::new(super::cpu::CpuBackend::new(prep)),
+        (Method::Antiradiance, BackendKind::Gpu) => {
+            Box::new(super::gpu::GpuBackend::new(gpu()?, prep, options.gpu)?)
         }
     })
 }

@@ -49,6 +49,7 @@ pub struct Engine {
     /// When the backend's setup began (start of the first render's `setup_ms`).
     setup_start: Option<Instant>,
     setup: Setup,
+    method: crate::settings::Method,
 }
 
 /// The Vulkan context `options` ask for: the host's, or a new headless one.
@@ -102,7 +103,7 @@ impl Engine {
         progress: &dyn Progress,
     ) -> Result<Self> {
         let setup_start = Instant::now();
-        let mut backend = backend::create(options.backend, &prep, ctx, options.gpu)?;
+        let mut backend = backend::create(options, &prep, ctx)?;
         let created_ms = ms(setup_start);
         let mut fallbacks = prep.fallbacks.clone();
         if options.backend == BackendKind::Gpu {
@@ -136,12 +137,18 @@ impl Engine {
             created: Some(setup_start),
             setup_start: Some(setup_start),
             setup,
+            method: options.method,
         })
     }
 
     /// The prepared scene: settings, camera, system, plan, surfaces, shadow maps.
     pub fn prepared(&self) -> &Prepared {
         &self.prep
+    }
+
+    /// How global illumination is computed.
+    pub fn method(&self) -> crate::settings::Method {
+        self.method
     }
 
     /// Which backend solves and draws.
@@ -328,6 +335,7 @@ impl Engine {
         let mut fallbacks = self.fallbacks.clone();
         fallbacks.extend(outcome.fallbacks);
         let stats = RenderStats {
+            method: self.method,
             backend: self.backend.kind(),
             device: self.backend.device(),
             elements: sys.leaves.len(),

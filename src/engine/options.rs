@@ -6,7 +6,7 @@ use crate::error::{Error, Result};
 use crate::gpu::Context;
 use crate::plan::target::{self, TargetChoice};
 use crate::scene::{Camera, Precision, Scene, Scheme, SolverSettings};
-use crate::settings::BackendKind;
+use crate::settings::{BackendKind, Method};
 use std::sync::Arc;
 
 /// Solver settings that replace the scene's `[solver]` values where given.
@@ -67,6 +67,8 @@ pub struct GpuTuning {
 pub struct Options {
     /// Which implementation solves and draws.
     pub backend: BackendKind,
+    /// How global illumination is computed.
+    pub method: Method,
     /// Solver settings replacing the scene's.
     pub solver: SolverOverrides,
     /// Image width replacing the camera's.
@@ -96,6 +98,7 @@ impl Default for Options {
     fn default() -> Self {
         Self {
             backend: BackendKind::Gpu,
+            method: Method::Antiradiance,
             solver: SolverOverrides::default(),
             width: None,
             height: None,

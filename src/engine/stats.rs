@@ -12,6 +12,8 @@ use std::collections::BTreeMap;
 /// Statistics of a render (the `--json` file).
 #[derive(Debug, Clone, Serialize)]
 pub struct RenderStats {
+    /// Method used.
+    pub method: crate::settings::Method,
     /// Backend used.
     pub backend: BackendKind,
     /// Device (GPU backend) or "cpu".
