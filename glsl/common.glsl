@@ -91,14 +91,15 @@ struct ShadowView {
     mat4 view_proj;
     vec4 origin;   // w: 1 orthographic, 0 perspective
     vec4 forward;  // w: half side / tan(fov/2)
+    uvec4 atlas;   // its map in the atlas: x0, y0, side
 };
 
 struct Light {
-    uvec4 kind_views;  // kind (0 directional, 1 point, 2 spot), first view, view count
+    uvec4 kind_views;  // kind (0 directional, 1 point, 2 spot, 3 emitter sample), first view, view count
     vec4 position;
-    vec4 direction;    // travel direction / spot axis
-    vec4 power;        // rgb irradiance or intensity; w spot cut-off (radians)
-    vec4 params;       // x spot beam width (radians)
+    vec4 direction;    // travel direction / spot axis / emitter normal
+    vec4 power;        // rgb irradiance, intensity or radiance; w spot cut-off (radians)
+    vec4 params;       // x spot beam width (radians) or emitter sample area
 };
 
 struct FrameElement {

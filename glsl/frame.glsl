@@ -108,28 +108,31 @@ bool ar_incident(Light l, vec3 p, out vec3 travel, out vec3 irradiance) {
         }
         irradiance *= f;
     }
+    if (kind == 3u) {
+        // A disc of the sample's area on its axis: L·A·cos/(r² + A/π), bounded as r → 0.
+        float cos_e = dot(travel, l.direction.xyz);
+        if (cos_e <= 0.0) {
+            return false;
+        }
+        float area = l.params.x;
+        irradiance = l.power.rgb * (area * cos_e / (r2 + area / AR_PI));
+    }
     return true;
-}
-
-uint ar_cube_face(vec3 v) {
-    vec3 a = abs(v);
-    if (a.x >= a.y && a.x >= a.z) {
-        return v.x < 0.0 ? 1u : 0u;
-    }
-    if (a.y >= a.z) {
-        return v.y < 0.0 ? 3u : 2u;
-    }
-    return v.z < 0.0 ? 5u : 4u;
 }
 
 // shadow.rs ShadowMaps::visibility: tent-filtered percentage-closer lookup.
 float ar_visibility(Light l, vec3 p, vec3 n, float cosv) {
+    // shadow.rs view_for: of a cube's faces, the one whose axis is nearest the direction.
     uint vi = l.kind_views.y;
-    if (l.kind_views.z == 6u) {
-        vi += ar_cube_face(p - shadow_views[vi].origin.xyz);
+    vec3 dir = p - shadow_views[vi].origin.xyz;
+    for (uint i = l.kind_views.y + 1u; i < l.kind_views.y + l.kind_views.z; i++) {
+        if (dot(dir, shadow_views[i].forward.xyz) > dot(dir, shadow_views[vi].forward.xyz)) {
+            vi = i;
+        }
     }
     ShadowView v = shadow_views[vi];
-    int s = int(pc.misc.z);
+    int s = int(v.atlas.z);
+    ivec2 base = ivec2(v.atlas.xy);
     bool ortho = v.origin.w > 0.5;
     float texel = 2.0 * v.forward.w * (ortho ? 1.0 : length(p - v.origin.xyz)) / float(s);
     vec3 q = p + n * (AR_SHADOW_NORMAL_OFFSET * texel);
@@ -148,7 +151,7 @@ float ar_visibility(Light l, vec3 p, vec3 n, float cosv) {
         for (int kx = x0; kx < x0 + 3; kx++) {
             float wx = max(1.0 - abs(float(kx) - tx) / AR_SHADOW_FILTER_RADIUS, 0.0);
             float w = wx * wy;
-            ivec2 t = ivec2(clamp(kx, 0, s - 1), clamp(ky, 0, s - 1) + int(vi) * s);
+            ivec2 t = base + ivec2(clamp(kx, 0, s - 1), clamp(ky, 0, s - 1));
             total += w;
             if (d <= texelFetch(shadow_map, t, 0).r) {
                 lit += w;

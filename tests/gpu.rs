@@ -512,9 +512,19 @@ fn embeds_in_a_host_device_and_command_buffer() {
     let images = gpu.images();
     assert_ne!(images.i_total.0, vk::Image::null());
     let gpu_ex = gpu.read_i_ex().unwrap();
-    let sys = &engine.prepared().system;
+    let prep = engine.prepared();
+    let sys = &prep.system;
     let mut cpu = CpuSolver::new(sys);
-    cpu.antiradiance = engine.prepared().plan.features.antiradiance;
+    cpu.antiradiance = prep.plan.features.antiradiance;
+    // The lamp lights the leaves by its shadow-mapped samples (the engine's maps, read back
+    // from the GPU), its emission out of the bins.
+    cpu.emission = prep.plan.features.emission;
+    assert!(!cpu.emission && !prep.maps.data.is_empty());
+    cpu.direct_in = Some(antiradiance::frame::lights::direct_in_table(
+        sys,
+        &prep.lights,
+        &prep.maps,
+    ));
     cpu.set_environment(scene.environment);
     cpu.solve(Scheme::Symmetric, 3, 4);
     let ex = worst_relative(sys, &cpu.i_ex, &cpu.i_ex, &gpu_ex, false);

@@ -371,9 +371,10 @@ fn near_mirror_phong_up_to_1e4_converges_with_bounded_energy() {
     let g = render_with("Phong 1e4", &s, Backend::Gpu);
     let e = worst_relative(&g, &c, 1.0);
     println!("Phong 1e4: GPU vs CPU worst pixel {e:.2e}");
-    // Measured 2.0e-6 (float32 tables: the albedo 0.99 gain rules out float16), allowing another
-    // device's float32 arithmetic.
-    assert!(e < 1e-5, "{e}");
+    // Measured 1.2e-3 (float32 tables: the albedo 0.99 gain rules out float16; the lamp lights
+    // by emitter samples, whose shadow maps are rasterized on the GPU and ray cast on the CPU,
+    // so texels at silhouettes differ), bound 3×.
+    assert!(e < 3.5e-3, "{e}");
 }
 
 /// 1024 bins, a single element, and elements spanning six orders of magnitude in area: both
@@ -456,7 +457,8 @@ fn extreme_discretizations_run_on_both_backends() {
     let g = render_with("six orders of area", &s, Backend::Gpu);
     let e = worst_relative(&g, &c, 1.0);
     println!("six orders of area: GPU vs CPU worst pixel {e:.2e}");
-    // Measured 3.1e-7 (float32 tables by range), allowing another device's float32 arithmetic.
-    assert!(e < 1e-5, "{e}");
+    // Measured 2.8e-5 (float32 tables by range; the lamp by emitter samples, whose shadow maps
+    // are rasterized on the GPU and ray cast on the CPU), bound 3×.
+    assert!(e < 1e-4, "{e}");
     let _ = Precision::F16;
 }

@@ -212,6 +212,10 @@ pub struct SolverArgs {
     /// Override `solver.filter_cutoff` (cone-filter truncation, fraction of a row's peak).
     #[arg(long, value_parser = positive)]
     pub filter_cutoff: Option<f64>,
+    /// Override `solver.emitter_samples` (shadow-mapped points on the emitting triangles; 0
+    /// carries area emitters' light through the bins instead).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=antiradiance::scene::MAX_EMITTER_SAMPLES as i64))]
+    pub emitter_samples: Option<u32>,
 }
 
 impl SolverArgs {
@@ -223,6 +227,7 @@ impl SolverArgs {
             scheme: self.scheme,
             precision: self.precision,
             filter_cutoff: self.filter_cutoff,
+            emitter_samples: self.emitter_samples.map(|n| n as usize),
             ..Default::default()
         }
     }

@@ -29,6 +29,7 @@ impl CpuBackend {
     pub fn new(prep: &Prepared) -> Self {
         let mut state = CpuState::new(&prep.system);
         state.antiradiance = prep.plan.features.antiradiance;
+        state.emission = prep.plan.features.emission;
         Self {
             state: Some(state),
             caster: RayCaster::new(&prep.system),
@@ -75,8 +76,8 @@ impl Backend for CpuBackend {
         }
         self.time("shadow", t);
         let t = Instant::now();
-        let direct = (!prep.scene.lights.is_empty())
-            .then(|| direct_in_table(&prep.system, &prep.scene.lights, &prep.maps));
+        let direct = (!prep.lights.is_empty())
+            .then(|| direct_in_table(&prep.system, &prep.lights, &prep.maps));
         let state = self.state.as_mut().expect("state present");
         state.environment = prep.scene.environment;
         state.direct_in = direct;
@@ -132,6 +133,7 @@ impl Backend for CpuBackend {
         let t = Instant::now();
         let image = cpu::render(
             &prep.scene,
+            &prep.lights,
             &prep.camera,
             &prep.system,
             &self.state().i_total,

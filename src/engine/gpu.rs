@@ -37,6 +37,7 @@ impl GpuBackend {
         let frame = GpuFrame::new(
             ctx.clone(),
             &prep.scene,
+            &prep.lights,
             &prep.camera,
             &prep.system,
             &prep.surfaces,
@@ -159,12 +160,9 @@ impl Backend for GpuBackend {
             self.frame.render_shadow_maps()?;
             let t = self.frame.timings().to_vec();
             self.collect(&t);
-            prep.maps.data = self.frame.read_shadow_maps()?;
-            self.direct = Some(direct_in_table(
-                &prep.system,
-                &prep.scene.lights,
-                &prep.maps,
-            ));
+            let atlas = self.frame.read_shadow_maps()?;
+            prep.maps.set_from_atlas(&atlas);
+            self.direct = Some(direct_in_table(&prep.system, &prep.lights, &prep.maps));
         }
         self.set_sources(prep)
     }

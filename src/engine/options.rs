@@ -32,6 +32,8 @@ pub struct SolverOverrides {
     pub max_iterations: Option<usize>,
     /// Truncation of the cone filters.
     pub filter_cutoff: Option<f64>,
+    /// Shadow-mapped samples of the area emitters (0: emission through the bins).
+    pub emitter_samples: Option<usize>,
 }
 
 impl SolverOverrides {
@@ -48,6 +50,7 @@ impl SolverOverrides {
         s.tolerance = self.tolerance.or(s.tolerance);
         s.max_iterations = self.max_iterations.unwrap_or(s.max_iterations);
         s.filter_cutoff = self.filter_cutoff.unwrap_or(s.filter_cutoff);
+        s.emitter_samples = self.emitter_samples.or(s.emitter_samples);
         s
     }
 }
@@ -178,6 +181,16 @@ impl Options {
             .filter(|c| !(1e-9..=0.5).contains(c))
         {
             return bad(format!("--filter-cutoff must be in [1e-9, 0.5], got {c}"));
+        }
+        if let Some(n) = self
+            .solver
+            .emitter_samples
+            .filter(|&n| n > crate::scene::MAX_EMITTER_SAMPLES)
+        {
+            return bad(format!(
+                "--emitter-samples must be 0..={}, got {n}",
+                crate::scene::MAX_EMITTER_SAMPLES
+            ));
         }
         if let Some(o) = self.solver.oracle.filter(|o| !(*o > 0.0 && o.is_finite())) {
             return bad(format!("the oracle τ must be positive and finite, got {o}"));

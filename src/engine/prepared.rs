@@ -4,23 +4,24 @@
 
 use super::options::{Options, Resolved};
 use crate::error::{Error, Result};
-use crate::frame::shadow::ShadowMaps;
+use crate::frame::emitters;
+use crate::frame::shadow::{ShadowMaps, MAX_ATLAS};
 use crate::frame::surfaces::Surfaces;
 use crate::gpu::resources::ResourcePlan;
 use crate::plan::target::TargetChoice;
 use crate::plan::Plan;
 use crate::progress::Progress;
-use crate::scene::{Camera, Scene, SolverSettings};
+use crate::scene::{Camera, Light, Scene, SolverSettings};
 use crate::system::System;
-
-/// Rows of the stacked shadow-map image (maxImageDimension2D of lavapipe and most GPUs).
-pub const MAX_SHADOW_ROWS: u32 = 16384;
 
 /// A scene prepared for solving.
 #[derive(Clone)]
 pub struct Prepared {
     /// The engine's copy of the scene (lights and objects may change between frames).
     pub scene: Scene,
+    /// The lights that shine: the scene's analytic lights and the samples of its area
+    /// emitters ([`crate::frame::emitters`]).
+    pub lights: Vec<Light>,
     /// Effective solver settings (the scene's with the options applied).
     pub settings: SolverSettings,
     /// Effective camera.
@@ -78,27 +79,43 @@ impl Prepared {
         progress.end();
         let system = system?;
         let surfaces = Surfaces::new(scene, &system);
-        let plan = Plan::new(
+        // The analytic lights, then the area emitters' samples (§3.3).
+        let mut lights = scene.lights.clone();
+        let emitter_choice = emitters::choose(scene, settings.emitter_samples);
+        lights.extend(emitters::sample(scene, emitter_choice.samples));
+        let mut plan = Plan::new(
             scene,
+            &lights,
             &system,
             &surfaces,
             settings.precision,
             options.all_passes,
         );
-        let mut maps = ShadowMaps::new(scene, options.shadow_map_size);
-        let mut fallbacks = Vec::new();
-        // All views share one image of side × (side · views) texels; keep it within 16384 rows.
-        let views = maps.views.len().max(1) as u32;
-        if options.shadow_map_size * views > MAX_SHADOW_ROWS {
-            let size = MAX_SHADOW_ROWS / views;
-            fallbacks.push(format!(
-                "{views} shadow-map views do not fit {} texels each; using {size}",
-                options.shadow_map_size
-            ));
-            maps = ShadowMaps::new(scene, size);
+        if emitter_choice.samples > 0 || settings.emitter_samples.is_some() {
+            plan.decisions.push(emitter_choice.reason);
         }
+        let mut fallbacks = Vec::new();
+        // All views share one atlas of at most 16384² texels; halve the maps until they fit.
+        let (mut size, mut sample_size) = (options.shadow_map_size, emitters::SAMPLE_MAP_SIZE);
+        let maps = loop {
+            if let Some(m) = ShadowMaps::new(scene, &lights, size, sample_size) {
+                break m;
+            }
+            if size <= 16 && sample_size <= 16 {
+                return Err(Error::Invalid(format!(
+                    "{} lights' shadow maps do not fit a {MAX_ATLAS}² atlas even at 16² texels each",
+                    lights.len()
+                )));
+            }
+            (size, sample_size) = ((size / 2).max(16), (sample_size / 2).max(16));
+            fallbacks.push(format!(
+                "the shadow maps do not fit a {MAX_ATLAS}² atlas at {}² texels each; using {size}² ({sample_size}² for emitter samples)",
+                size * 2
+            ));
+        };
         Ok(Self {
             scene: scene.clone(),
+            lights,
             settings,
             camera,
             target,
@@ -116,7 +133,7 @@ impl Prepared {
         let mut p = self.clone();
         p.plan = Plan {
             precision: self.plan.precision,
-            ..Plan::everything(&self.scene, &self.system, &self.surfaces)
+            ..Plan::everything(&self.scene, &self.lights, &self.system, &self.surfaces)
         };
         p
     }

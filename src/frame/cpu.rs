@@ -8,7 +8,7 @@ use super::lights::direct_radiance;
 use super::shadow::ShadowMaps;
 use super::surfaces::{display_radiance, splat_weight, vertex_values, Surfaces, MODE_VERTEX};
 use crate::raycast::RayCaster;
-use crate::scene::{Camera, Scene};
+use crate::scene::{Camera, Light, Scene};
 use crate::solver::Table;
 use crate::system::System;
 use glam::DVec3;
@@ -55,6 +55,7 @@ impl SplatGrid {
 /// Renders `camera`'s view of `scene` from the solved display intensities `i_total`.
 pub fn render(
     scene: &Scene,
+    lights: &[Light],
     camera: &Camera,
     sys: &System,
     i_total: &Table,
@@ -88,8 +89,8 @@ pub fn render(
                                 DVec3::ZERO // one-sided surfaces: the back is black
                             } else {
                                 let mat = &sys.materials[leaf.material as usize];
-                                let mut l = mat.ke
-                                    + direct_radiance(&scene.lights, maps, p, leaf.normal, mat, wo);
+                                let mut l =
+                                    mat.ke + direct_radiance(lights, maps, p, leaf.normal, mat, wo);
                                 if surf.mode[li] == MODE_VERTEX {
                                     let cv = surf.corner_vertex[li];
                                     l += verts[cv[0] as usize] * (1.0 - hit.u - hit.v)

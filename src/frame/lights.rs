@@ -73,6 +73,26 @@ pub fn incident(light: &Light, p: DVec3) -> Option<Incident> {
                 irradiance: intensity * (f / r2),
             })
         }
+        Light::EmitterSample {
+            position,
+            normal,
+            radiance,
+            area,
+        } => {
+            let v = p - position;
+            let r2 = v.length_squared();
+            if r2 <= 0.0 {
+                return None;
+            }
+            let travel = v / r2.sqrt();
+            let cos_e = travel.dot(normal);
+            // A disc of the sample's area seen on its axis gives L·A·cos/(r² + A/π) of
+            // irradiance, bounded as r → 0 where a point's 1/r² is not.
+            (cos_e > 0.0).then(|| Incident {
+                travel,
+                irradiance: radiance * (area * cos_e / (r2 + area / PI)),
+            })
+        }
     }
 }
 

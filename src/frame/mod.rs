@@ -4,6 +4,7 @@
 
 pub mod camera;
 pub mod cpu;
+pub mod emitters;
 pub mod image;
 pub mod lights;
 pub mod shadow;

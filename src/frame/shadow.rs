@@ -1,5 +1,7 @@
-//! Shadow maps for the analytic lights (§3.3): one orthographic view for a directional light,
-//! one perspective view for a spot light with a cut-off below 75°, six cube faces otherwise.
+//! Shadow maps for the lights (§3.3): one orthographic view for a directional light, one
+//! perspective view for a spot light with a cut-off below 75°, six cube faces otherwise (point
+//! lights, wide spots, area-emitter samples). All views share one atlas image, each at its own
+//! size (emitter samples' maps are small, see [`crate::frame::emitters::SAMPLE_MAP_SIZE`]).
 //! A map stores the *linear* distance to the nearest surface at each texel center (from the light
 //! for perspective views, from the near plane for orthographic ones), so the GPU (rasterized,
 //! `glsl/shadow.frag`) and the CPU (ray cast at texel centers) build the same map, and one
@@ -26,6 +28,10 @@ const SPOT_SINGLE_VIEW_MAX_DEG: f64 = 75.0;
 /// One rendered view of a light.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ShadowView {
+    /// Side of its map, texels.
+    pub size: u32,
+    /// Its map's top-left texel in the atlas.
+    pub atlas: (u32, u32),
     /// World → Vulkan clip space (x right, y down, reversed depth 1..0).
     pub view_proj: DMat4,
     /// Light position (perspective) or a point on the near plane (orthographic).
@@ -40,6 +46,9 @@ pub struct ShadowView {
     pub half: f64,
     /// Orthographic (directional light) rather than perspective.
     pub ortho: bool,
+    /// A one-sided light's normal: texels whose rays leave well behind it are never looked up,
+    /// and the CPU leaves them empty rather than cast them.
+    pub front: Option<DVec3>,
 }
 
 impl ShadowView {
@@ -49,12 +58,33 @@ impl ShadowView {
         } else {
             DVec3::Z
         };
-        let right = forward.cross(helper).normalize();
+        Self::perspective_with(
+            origin,
+            forward,
+            forward.cross(helper).normalize(),
+            half_angle,
+            near,
+            far,
+        )
+    }
+
+    /// A perspective view with the image's right given (unit, perpendicular to `forward`): the
+    /// faces of a turned cube must share its edges.
+    fn perspective_with(
+        origin: DVec3,
+        forward: DVec3,
+        right: DVec3,
+        half_angle: f64,
+        near: f64,
+        far: f64,
+    ) -> Self {
         let up = right.cross(forward);
         let half = half_angle.tan();
         let view = basis(origin, forward, right, up);
         let proj = super::camera::reversed_perspective(1.0 / half, 1.0 / half, near, far);
         Self {
+            size: 0,
+            atlas: (0, 0),
             view_proj: proj * view,
             origin,
             forward,
@@ -62,6 +92,7 @@ impl ShadowView {
             up,
             half,
             ortho: false,
+            front: None,
         }
     }
 
@@ -98,6 +129,109 @@ impl ShadowView {
     }
 }
 
+/// Appends the views of `light` over a scene of bounding sphere (`center`, `radius`).
+fn light_views_of(light: &Light, center: DVec3, radius: f64, views: &mut Vec<ShadowView>) {
+    match light {
+        Light::Directional { direction, .. } => {
+            let f = *direction;
+            let helper = if f.y.abs() < 0.9 { DVec3::Y } else { DVec3::Z };
+            let r = f.cross(helper).normalize();
+            let u = r.cross(f);
+            let half = radius * 1.02;
+            let origin = center - f * (radius * 1.02);
+            let depth = 2.0 * radius * 1.02;
+            let view = basis(origin, f, r, u);
+            let proj = DMat4::from_cols(
+                DVec4::new(1.0 / half, 0.0, 0.0, 0.0),
+                DVec4::new(0.0, 1.0 / half, 0.0, 0.0),
+                DVec4::new(0.0, 0.0, -1.0 / depth, 0.0),
+                DVec4::new(0.0, 0.0, 1.0, 1.0),
+            );
+            views.push(ShadowView {
+                size: 0,
+                atlas: (0, 0),
+                view_proj: proj * view,
+                origin,
+                forward: f,
+                right: r,
+                up: u,
+                half,
+                ortho: true,
+                front: None,
+            });
+        }
+        Light::EmitterSample {
+            position, normal, ..
+        } => {
+            // A one-sided emitter sees only its front: the cube turned to its normal, without
+            // the face behind it (five faces; the sides' back halves are never looked up).
+            let far = (*position - center).length() + radius * 1.02;
+            let near = (far * 1e-5).max(1e-7);
+            let helper = if normal.y.abs() < 0.9 {
+                DVec3::Y
+            } else {
+                DVec3::Z
+            };
+            let r = normal.cross(helper).normalize();
+            let u = r.cross(*normal);
+            // Each face's right is another of the cube's axes, so the faces meet edge to edge.
+            for (f, right) in [(*normal, r), (r, u), (-r, u), (u, r), (-u, r)] {
+                let quarter = std::f64::consts::FRAC_PI_4;
+                let mut v = ShadowView::perspective_with(*position, f, right, quarter, near, far);
+                v.front = Some(*normal);
+                views.push(v);
+            }
+        }
+        Light::Point { position, .. } | Light::Spot { position, .. } => {
+            let far = (*position - center).length() + radius * 1.02;
+            let near = (far * 1e-5).max(1e-7);
+            match light {
+                Light::Spot { axis, cutoff, .. }
+                    if cutoff.to_degrees() < SPOT_SINGLE_VIEW_MAX_DEG =>
+                {
+                    let half = (cutoff * 1.05 + 0.01).min(80f64.to_radians());
+                    views.push(ShadowView::perspective(*position, *axis, half, near, far));
+                }
+                _ => {
+                    for f in CUBE {
+                        views.push(ShadowView::perspective(
+                            *position,
+                            f,
+                            std::f64::consts::FRAC_PI_4,
+                            near,
+                            far,
+                        ));
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Places every view's map in an atlas, in rows (larger maps first keep the rows even), and
+/// returns the atlas size, or `None` beyond [`MAX_ATLAS`] on a side.
+fn pack_atlas(views: &mut [ShadowView]) -> Option<(u32, u32)> {
+    let area: u64 = views.iter().map(|v| (v.size as u64).pow(2)).sum();
+    let largest = views.iter().map(|v| v.size).max().unwrap_or(1).max(1);
+    let width = ((area as f64).sqrt().ceil() as u32)
+        .next_power_of_two()
+        .clamp(largest, MAX_ATLAS.max(largest));
+    let mut order: Vec<usize> = (0..views.len()).collect();
+    order.sort_by_key(|&i| std::cmp::Reverse(views[i].size));
+    let (mut x, mut y, mut row) = (0u32, 0u32, 0u32);
+    for i in order {
+        let s = views[i].size;
+        if x + s > width {
+            (x, y, row) = (0, y + row, 0);
+        }
+        views[i].atlas = (x, y);
+        x += s;
+        row = row.max(s);
+    }
+    let height = (y + row).max(1);
+    (width <= MAX_ATLAS && height <= MAX_ATLAS).then_some((width, height))
+}
+
 /// World → view matrix for camera space x right, y down, z forward.
 fn basis(o: DVec3, f: DVec3, r: DVec3, u: DVec3) -> DMat4 {
     DMat4::from_cols(
@@ -118,125 +252,131 @@ const CUBE: [DVec3; 6] = [
     DVec3::NEG_Z,
 ];
 
-/// Cube face of direction `v` (major axis), as indexed in [`CUBE`].
-pub fn cube_face(v: DVec3) -> usize {
-    let a = v.abs();
-    if a.x >= a.y && a.x >= a.z {
-        (v.x < 0.0) as usize
-    } else if a.y >= a.z {
-        2 + (v.y < 0.0) as usize
-    } else {
-        4 + (v.z < 0.0) as usize
-    }
-}
+/// Largest side of the atlas holding every view's map (maxImageDimension2D of lavapipe and
+/// most GPUs).
+pub const MAX_ATLAS: u32 = 16384;
 
 /// The shadow maps of every light of a scene.
 #[derive(Debug, Clone)]
 pub struct ShadowMaps {
-    /// Side of every map, texels.
+    /// Side of analytic lights' maps, texels.
     pub size: u32,
     /// All views, lights in order.
     pub views: Vec<ShadowView>,
     /// First view and view count (1 or 6) per light.
     pub light_views: Vec<(u32, u32)>,
-    /// Distances, view after view, row-major (`views.len() × size × size`); empty until rendered.
+    /// Width and height of the atlas image holding every view's map.
+    pub atlas: (u32, u32),
+    /// Where each view's map starts in [`ShadowMaps::data`].
+    pub offsets: Vec<usize>,
+    /// Distances, view after view, each row-major (`size × size` of its view); empty until
+    /// rendered.
     pub data: Vec<f32>,
 }
 
 impl ShadowMaps {
-    /// The views for `scene`'s lights, fitted to its bounds (no map data yet).
-    pub fn new(scene: &Scene, size: u32) -> Self {
+    /// The views for `lights` over `scene`, fitted to its bounds (no map data yet): analytic
+    /// lights' maps of `size`² texels, emitter samples' of `sample_size`², packed into one atlas
+    /// in rows. Returns `None` when the atlas would exceed [`MAX_ATLAS`] on a side.
+    pub fn new(scene: &Scene, lights: &[Light], size: u32, sample_size: u32) -> Option<Self> {
         let (lo, hi) = scene.bounds();
         let (center, radius) = ((lo + hi) * 0.5, ((hi - lo).length() * 0.5).max(1e-6));
         let mut views = Vec::new();
         let mut light_views = Vec::new();
-        for light in &scene.lights {
-            let first = views.len() as u32;
-            match light {
-                Light::Directional { direction, .. } => {
-                    let f = *direction;
-                    let helper = if f.y.abs() < 0.9 { DVec3::Y } else { DVec3::Z };
-                    let r = f.cross(helper).normalize();
-                    let u = r.cross(f);
-                    let half = radius * 1.02;
-                    let origin = center - f * (radius * 1.02);
-                    let depth = 2.0 * radius * 1.02;
-                    let view = basis(origin, f, r, u);
-                    let proj = DMat4::from_cols(
-                        DVec4::new(1.0 / half, 0.0, 0.0, 0.0),
-                        DVec4::new(0.0, 1.0 / half, 0.0, 0.0),
-                        DVec4::new(0.0, 0.0, -1.0 / depth, 0.0),
-                        DVec4::new(0.0, 0.0, 1.0, 1.0),
-                    );
-                    views.push(ShadowView {
-                        view_proj: proj * view,
-                        origin,
-                        forward: f,
-                        right: r,
-                        up: u,
-                        half,
-                        ortho: true,
-                    });
-                }
-                Light::Point { position, .. } | Light::Spot { position, .. } => {
-                    let far = (*position - center).length() + radius * 1.02;
-                    let near = (far * 1e-5).max(1e-7);
-                    match light {
-                        Light::Spot { axis, cutoff, .. }
-                            if cutoff.to_degrees() < SPOT_SINGLE_VIEW_MAX_DEG =>
-                        {
-                            let half = (cutoff * 1.05 + 0.01).min(80f64.to_radians());
-                            views.push(ShadowView::perspective(*position, *axis, half, near, far));
-                        }
-                        _ => {
-                            for f in CUBE {
-                                views.push(ShadowView::perspective(
-                                    *position,
-                                    f,
-                                    std::f64::consts::FRAC_PI_4,
-                                    near,
-                                    far,
-                                ));
-                            }
-                        }
-                    }
-                }
+        for light in lights {
+            let first = views.len();
+            light_views_of(light, center, radius, &mut views);
+            let side = if matches!(light, Light::EmitterSample { .. }) {
+                sample_size
+            } else {
+                size
+            };
+            for v in &mut views[first..] {
+                v.size = side;
             }
-            light_views.push((first, views.len() as u32 - first));
+            light_views.push((first as u32, (views.len() - first) as u32));
         }
-        Self {
+        let atlas = pack_atlas(&mut views)?;
+        let mut offsets = Vec::with_capacity(views.len());
+        let mut at = 0;
+        for v in &views {
+            offsets.push(at);
+            at += (v.size * v.size) as usize;
+        }
+        Some(Self {
             size,
             views,
             light_views,
+            atlas,
+            offsets,
             data: Vec::new(),
+        })
+    }
+
+    /// Texels of every view together.
+    pub fn texels(&self) -> usize {
+        self.views.iter().map(|v| (v.size * v.size) as usize).sum()
+    }
+
+    /// Fills [`ShadowMaps::data`] from the atlas image read back from the GPU (row-major,
+    /// `atlas.0 × atlas.1`).
+    pub fn set_from_atlas(&mut self, atlas: &[f32]) {
+        let w = self.atlas.0 as usize;
+        let mut data = Vec::with_capacity(self.texels());
+        for v in &self.views {
+            let (x0, y0, s) = (v.atlas.0 as usize, v.atlas.1 as usize, v.size as usize);
+            for y in 0..s {
+                data.extend_from_slice(&atlas[(y0 + y) * w + x0..(y0 + y) * w + x0 + s]);
+            }
         }
+        self.data = data;
     }
 
     /// Fills the maps by casting a ray through every texel center (the CPU backend).
     pub fn render_cpu(&mut self, caster: &RayCaster) {
-        let s = self.size as usize;
-        let mut data = vec![EMPTY; self.views.len() * s * s];
-        data.par_chunks_mut(s).enumerate().for_each(|(row, out)| {
-            let (v, j) = (row / s, (row % s) as u32);
-            let view = &self.views[v];
-            for (i, o) in out.iter_mut().enumerate() {
-                let (org, dir) = view.texel_ray(i as u32, j, self.size);
-                if let Some(h) = caster.closest(org, dir, 0.0, f64::INFINITY) {
-                    *o = view.distance(org + dir * h.t) as f32;
-                }
-            }
-        });
-        self.data = data;
+        // One task per texel row of every view (rows of different views differ in length).
+        let rows: Vec<(usize, u32)> = self
+            .views
+            .iter()
+            .enumerate()
+            .flat_map(|(v, view)| (0..view.size).map(move |j| (v, j)))
+            .collect();
+        let filled: Vec<Vec<f32>> = rows
+            .par_iter()
+            .map(|&(v, j)| {
+                let view = &self.views[v];
+                (0..view.size)
+                    .map(|i| {
+                        let (org, dir) = view.texel_ray(i, j, view.size);
+                        // Behind a one-sided light by more than the lookup's filter reaches.
+                        if view.front.is_some_and(|n| dir.dot(n) < -0.1) {
+                            return EMPTY;
+                        }
+                        caster
+                            .closest(org, dir, 0.0, f64::INFINITY)
+                            .map_or(EMPTY, |h| view.distance(org + dir * h.t) as f32)
+                    })
+                    .collect()
+            })
+            .collect();
+        self.data = filled.concat();
     }
 
-    /// The view of light `light` that covers point `p`.
+    /// The view of light `light` that covers point `p`: of several (a cube's faces), the one
+    /// whose axis is nearest the direction to `p` (the first of equals).
     pub fn view_for(&self, light: usize, p: DVec3) -> usize {
-        let (first, count) = self.light_views[light];
-        if count == 6 {
-            first as usize + cube_face(p - self.views[first as usize].origin)
-        } else {
-            first as usize
+        let (first, count) = (
+            self.light_views[light].0 as usize,
+            self.light_views[light].1 as usize,
+        );
+        let v = p - self.views[first].origin;
+        let mut best = first;
+        for i in first + 1..first + count {
+            if v.dot(self.views[i].forward) > v.dot(self.views[best].forward) {
+                best = i;
+            }
         }
+        best
     }
 
     /// Filtered fraction of light `light` reaching `p`, a surface point with unit normal `n`
@@ -247,8 +387,8 @@ impl ShadowMaps {
         }
         let vi = self.view_for(light, p);
         let view = &self.views[vi];
-        let s = self.size as i64;
-        let texel = view.texel_size(p, self.size);
+        let s = view.size as i64;
+        let texel = view.texel_size(p, view.size);
         let q = p + n * (NORMAL_OFFSET * texel);
         let c = view.view_proj * q.extend(1.0);
         let (x, y) = (c.x / c.w, c.y / c.w);
@@ -256,7 +396,7 @@ impl ShadowMaps {
         let ty = (y + 1.0) * 0.5 * s as f64 - 0.5;
         let tan = ((1.0 - cos * cos).max(0.0).sqrt() / cos.max(1e-6)).min(8.0);
         let d = view.distance(q) - texel * (CONSTANT_BIAS + SLOPE_BIAS * tan);
-        let base = &self.data[vi * (s * s) as usize..(vi + 1) * (s * s) as usize];
+        let base = &self.data[self.offsets[vi]..self.offsets[vi] + (s * s) as usize];
         let (mut lit, mut total) = (0.0, 0.0);
         let (x0, y0) = (
             (tx - FILTER_RADIUS).floor() as i64 + 1,
@@ -330,9 +470,28 @@ mod tests {
             position: DVec3::new(0.5, 1.0, 0.5),
             intensity: DVec3::ONE,
         });
-        let maps = ShadowMaps::new(&scene, 16);
-        assert_eq!(maps.light_views, vec![(0, 1), (1, 6)]);
-        for v in &maps.views {
+        let tilted = DVec3::new(0.3, -1.0, 0.1).normalize();
+        scene.lights.push(Light::EmitterSample {
+            position: DVec3::new(0.2, 0.9, 0.4),
+            normal: tilted,
+            radiance: DVec3::ONE,
+            area: 0.01,
+        });
+        let maps = ShadowMaps::new(&scene, &scene.lights, 16, 8).unwrap();
+        assert_eq!(maps.light_views, vec![(0, 1), (1, 6), (7, 5)]);
+        assert!(maps.views[7..].iter().all(|v| v.size == 8));
+        // The atlas holds every map without overlap.
+        for (a, va) in maps.views.iter().enumerate() {
+            assert!(va.atlas.0 + va.size <= maps.atlas.0 && va.atlas.1 + va.size <= maps.atlas.1);
+            for vb in &maps.views[a + 1..] {
+                let apart = va.atlas.0 + va.size <= vb.atlas.0
+                    || vb.atlas.0 + vb.size <= va.atlas.0
+                    || va.atlas.1 + va.size <= vb.atlas.1
+                    || vb.atlas.1 + vb.size <= va.atlas.1;
+                assert!(apart, "{va:?} overlaps {vb:?}");
+            }
+        }
+        for v in &maps.views[..7] {
             for (i, j) in [(0, 0), (5, 9), (15, 15)] {
                 let (o, d) = v.texel_ray(i, j, 16);
                 let p = o + d * 0.7;
@@ -343,11 +502,34 @@ mod tests {
                 assert!((0.0..=1.0).contains(&(c.z / c.w)));
             }
         }
-        // Every cube face covers the directions whose major axis it is.
+        // The face chosen for a direction covers it: the point light's −y face here, and for
+        // the emitter sample one of its five faces for every direction in front of it.
         let d = DVec3::new(0.2, -0.9, 0.3);
-        let f = cube_face(d);
-        assert_eq!(f, 3);
-        let c = maps.views[1 + f].view_proj * (maps.views[1].origin + d).extend(1.0);
-        assert!((c.x / c.w).abs() <= 1.0 && (c.y / c.w).abs() <= 1.0);
+        let f = maps.view_for(1, maps.views[1].origin + d);
+        assert_eq!(f, 1 + 3);
+        let covers = |f: usize, p: DVec3| {
+            let c = maps.views[f].view_proj * p.extend(1.0);
+            (c.x / c.w).abs() <= 1.0 + 1e-12 && (c.y / c.w).abs() <= 1.0 + 1e-12 && c.w > 0.0
+        };
+        assert!(covers(f, maps.views[1].origin + d));
+        let mut rng = 1u64;
+        let mut uniform = || {
+            rng = rng
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (rng >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        let origin = maps.views[7].origin;
+        for _ in 0..1000 {
+            let d = DVec3::new(uniform(), uniform(), uniform());
+            if d.length() > 1.0 || d.dot(tilted) <= 1e-3 {
+                continue;
+            }
+            let f = maps.view_for(2, origin + d);
+            assert!(
+                (7..12).contains(&f) && covers(f, origin + d),
+                "{d} → view {f}"
+            );
+        }
     }
 }

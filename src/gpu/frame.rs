@@ -23,7 +23,7 @@ use crate::frame::shadow::ShadowMaps;
 use crate::frame::surfaces::Surfaces;
 use crate::frame::Image as Frame;
 use crate::plan::Features;
-use crate::scene::{Camera, Scene};
+use crate::scene::{Camera, Light, Scene};
 use crate::system::System;
 use ash::vk;
 use std::sync::Arc;
@@ -54,7 +54,14 @@ struct FrameData {
 }
 
 impl FrameData {
-    fn new(scene: &Scene, sys: &System, surf: &Surfaces, maps: &ShadowMaps, f: &Features) -> Self {
+    fn new(
+        scene: &Scene,
+        lights: &[Light],
+        sys: &System,
+        surf: &Surfaces,
+        maps: &ShadowMaps,
+        f: &Features,
+    ) -> Self {
         // Shared-vertex adjacency only where smooth meshes are interpolated.
         let (adj_offsets, adj_list) = if f.vertex {
             (surf.adjacency_offsets.clone(), surf.adjacency.clone())
@@ -70,7 +77,7 @@ impl FrameData {
             elements: pack::padded(pack::frame_elements(sys, surf)),
             adj_offsets: pack::padded(adj_offsets),
             adj_list: pack::padded(adj_list),
-            lights: pack::padded(pack::lights(&scene.lights, maps)),
+            lights: pack::padded(pack::lights(lights, maps)),
             shadow_views: pack::padded(pack::shadow_views(maps)),
         }
     }
@@ -113,8 +120,8 @@ pub struct GpuFrame {
     corner_count: u32,
     splat_count: u32,
     features: Features,
-    views: u32,
-    shadow_size: u32,
+    /// Each shadow view's map in the atlas: x, y, side.
+    shadow_rects: Vec<[u32; 3]>,
     timings: Vec<(String, f64)>,
     setup: super::solver::SetupTimes,
     sampler: Owned<vk::Sampler>,
@@ -123,7 +130,7 @@ pub struct GpuFrame {
 }
 
 /// The frame's push constants for `camera` over `scene` (its bounds set the depth range).
-fn constants(scene: &Scene, camera: &Camera, sys: &System, shadow_size: u32) -> FrameConstants {
+fn constants(scene: &Scene, lights: usize, camera: &Camera, sys: &System) -> FrameConstants {
     let view = View::new(camera);
     let (lo, hi) = scene.bounds();
     let far = ((lo + hi) * 0.5 - view.eye).length() + (hi - lo).length() + 1e-6;
@@ -139,7 +146,7 @@ fn constants(scene: &Scene, camera: &Camera, sys: &System, shadow_size: u32) -> 
             grid,
             0,
         ],
-        misc: [scene.lights.len() as u32, 0, shadow_size, SUPERSAMPLE],
+        misc: [lights as u32, 0, 0, SUPERSAMPLE],
     }
 }
 
@@ -151,8 +158,7 @@ impl GpuFrame {
         features: &Features,
         maps: &ShadowMaps,
     ) -> FrameImages<ImageDesc> {
-        let views = maps.views.len() as u32;
-        FrameImages::describe(camera.width, camera.height, features, maps.size, views)
+        FrameImages::describe(camera.width, camera.height, features, maps.atlas)
     }
 
     /// Memory of the frame's images, by purpose.
@@ -160,11 +166,13 @@ impl GpuFrame {
         MemoryReport::default().images(Self::describe(camera, features, maps).iter())
     }
 
-    /// Uploads the geometry, lights and shadow views and creates the frame's images and
-    /// pipelines for `camera`.
+    /// Uploads the geometry, `lights` (the scene's and its emitter samples) and their shadow
+    /// views and creates the frame's images and pipelines for `camera`.
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         ctx: Arc<Context>,
         scene: &Scene,
+        lights: &[Light],
         camera: &Camera,
         sys: &System,
         surf: &Surfaces,
@@ -173,7 +181,7 @@ impl GpuFrame {
     ) -> Result<Self> {
         let c = &ctx;
         let t = std::time::Instant::now();
-        let data = FrameData::new(scene, sys, surf, maps, features);
+        let data = FrameData::new(scene, lights, sys, surf, maps, features);
         let buffers = data.upload(c)?;
         let images = Self::describe(camera, features, maps).try_map(|d| d.create(c))?;
         let uploads_ms = t.elapsed().as_secs_f64() * 1e3;
@@ -208,9 +216,12 @@ impl GpuFrame {
             corner_count: data.corners.len() as u32,
             splat_count: pack::splat_instances(surf, features.splat).len() as u32,
             features: *features,
-            views: maps.views.len() as u32,
-            shadow_size: maps.size,
-            constants: constants(scene, camera, sys, maps.size),
+            shadow_rects: maps
+                .views
+                .iter()
+                .map(|v| [v.atlas.0, v.atlas.1, v.size])
+                .collect(),
+            constants: constants(scene, lights.len(), camera, sys),
             profiler: Profiler::new(c, 16)?,
             ctx: ctx.clone(),
             images,
@@ -234,7 +245,7 @@ impl GpuFrame {
         let ctx = self.ctx.clone();
         let im = &mut self.images;
         let mut unused: Vec<(&mut Image, f32)> = Vec::new();
-        if self.views == 0 {
+        if self.shadow_rects.is_empty() {
             unused.push((&mut im.shadow_map, crate::frame::shadow::EMPTY));
         }
         if !self.features.vertex {
@@ -290,7 +301,7 @@ impl GpuFrame {
 
     /// Records the shadow maps of every light view.
     pub fn record_shadow_maps(&mut self, cmd: vk::CommandBuffer) {
-        if self.views == 0 {
+        if self.shadow_rects.is_empty() {
             return;
         }
         let ctx = self.ctx.clone();
@@ -307,8 +318,7 @@ impl GpuFrame {
             &mut self.images,
             self.buffers.corners.raw,
             self.corner_count,
-            self.views,
-            self.shadow_size,
+            &self.shadow_rects,
             self.constants,
         );
         self.profiler.end(&ctx, cmd);
@@ -325,8 +335,9 @@ impl GpuFrame {
         Ok(())
     }
 
-    /// Reads the shadow maps back (the layout of [`ShadowMaps::data`]); the leaves' direct light
-    /// is computed from them on the host, so leaves and pixels see the same maps.
+    /// Reads the shadow-map atlas back (row-major; [`ShadowMaps::set_from_atlas`] takes it); the
+    /// leaves' direct light is computed from it on the host, so leaves and pixels see the same
+    /// maps.
     pub fn read_shadow_maps(&mut self) -> Result<Vec<f32>> {
         Ok(pack::decode_r32(&self.images.shadow_map.read()?))
     }

@@ -235,21 +235,25 @@ pub struct GpuShadowView {
     pub origin: [f32; 4],
     /// Unit axis (xyz); half side or tan(fov/2) (w).
     pub forward: [f32; 4],
+    /// Its map in the atlas: first texel x, y, side, unused.
+    pub atlas: [u32; 4],
 }
 
 /// One analytic light (`Light` in common.glsl).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct GpuLight {
-    /// Kind (0 directional, 1 point, 2 spot), first shadow view, view count, unused.
+    /// Kind (0 directional, 1 point, 2 spot, 3 emitter sample), first shadow view, view count,
+    /// unused.
     pub kind_views: [u32; 4],
     /// Position (xyz).
     pub position: [f32; 4],
-    /// Travel direction (directional) or spot axis (xyz).
+    /// Travel direction (directional), spot axis or emitter normal (xyz).
     pub direction: [f32; 4],
-    /// Irradiance (directional) or intensity (rgb); spot cut-off in radians (w).
+    /// Irradiance (directional), intensity or emitted radiance (rgb); spot cut-off in radians
+    /// (w).
     pub power: [f32; 4],
-    /// Spot beam width in radians (x).
+    /// Spot beam width in radians or emitter sample area (x).
     pub params: [f32; 4],
 }
 
@@ -450,10 +454,10 @@ mod tests {
             glsl_fields("FrameConstants"),
             ["view_proj", "eye", "environment", "sizes", "misc"]
         );
-        assert_eq!(size_of::<GpuShadowView>(), 96);
+        assert_eq!(size_of::<GpuShadowView>(), 112);
         assert_eq!(
             glsl_fields("ShadowView"),
-            ["view_proj", "origin", "forward"]
+            ["view_proj", "origin", "forward", "atlas"]
         );
         assert_eq!(size_of::<GpuLight>(), 80);
         assert_eq!(

@@ -218,7 +218,8 @@ pub fn glossy_terms(sys: &System, lobe_bins: &[u32]) -> u64 {
                 .iter()
                 .filter(|d| d.dot(leaf.normal) > 0.0)
                 .map(|d| {
-                    let (u, v) = crate::bins::direction_to_square(crate::brdf::mirror(*d, leaf.normal));
+                    let (u, v) =
+                        crate::bins::direction_to_square(crate::brdf::mirror(*d, leaf.normal));
                     let iu = (((u + 1.0) * 0.5 * nu as f64) as usize).min(nu - 1);
                     let iv = (((v + 1.0) * 0.5 * nv as f64) as usize).min(nv - 1);
                     let b = iv * nu + iu;
@@ -329,6 +330,12 @@ pub fn lights(lights: &[Light], maps: &ShadowMaps) -> Vec<GpuLight> {
                     cutoff,
                     beam_width,
                 } => (2, position, axis, intensity, cutoff, beam_width),
+                Light::EmitterSample {
+                    position,
+                    normal,
+                    radiance,
+                    area,
+                } => (3, position, normal, radiance, 0.0, area),
             };
             GpuLight {
                 kind_views: [kind, first, count, 0],
@@ -349,6 +356,7 @@ pub fn shadow_views(maps: &ShadowMaps) -> Vec<GpuShadowView> {
             view_proj: mat(v.view_proj),
             origin: v4(v.origin, if v.ortho { 1.0 } else { 0.0 }),
             forward: v4(v.forward, v.half as f32),
+            atlas: [v.atlas.0, v.atlas.1, v.size, 0],
         })
         .collect()
 }

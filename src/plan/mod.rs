@@ -8,7 +8,7 @@ pub mod range;
 pub mod target;
 
 use crate::frame::surfaces::{Surfaces, MODE_SPLAT, MODE_VERTEX};
-use crate::scene::{Precision, Scene};
+use crate::scene::{Light, Precision, Scene};
 use crate::system::System;
 use occlusion::Occlusion;
 use range::Range;
@@ -105,9 +105,16 @@ pub struct Plan {
 }
 
 impl Plan {
-    /// Analyses `scene` (discretized as `sys`, drawn with `surf`) when `requested` table
-    /// precision is asked for.
-    pub fn analyze(scene: &Scene, sys: &System, surf: &Surfaces, requested: Precision) -> Self {
+    /// Analyses `scene` lit by `lights` (its analytic lights and any emitter samples, see
+    /// [`crate::frame::emitters`]), discretized as `sys`, drawn with `surf`, when `requested`
+    /// table precision is asked for.
+    pub fn analyze(
+        scene: &Scene,
+        lights: &[Light],
+        sys: &System,
+        surf: &Surfaces,
+        requested: Precision,
+    ) -> Self {
         let mut d = Vec::new();
         let f0 = Features::for_system(sys);
         let antiradiance = match occlusion::analyze(scene) {
@@ -136,21 +143,27 @@ impl Plan {
             }
             (false, false) => "no elements: no local pass".into(),
         });
-        let shadow: Vec<String> = ["directional", "spot", "point"]
+        let shadow: Vec<String> = ["directional", "spot", "point", "emitter"]
             .into_iter()
-            .filter(|k| scene.lights.iter().any(|l| l.kind() == *k))
+            .filter(|k| lights.iter().any(|l| l.kind() == *k))
             .map(String::from)
             .collect();
         d.push(if shadow.is_empty() {
-            "no analytic lights: no shadow maps, no direct-light table".into()
+            "no lights and no sampled emitters: no shadow maps, no direct-light table".into()
         } else {
             format!("shadow maps for {} lights", shadow.join(", "))
         });
-        let emission = sys
+        let emitters = sys
             .leaves
             .iter()
             .any(|l| sys.materials[l.material as usize].is_emitter());
-        if !emission {
+        let sampled = lights
+            .iter()
+            .any(|l| matches!(l, Light::EmitterSample { .. }));
+        // Sampled emitters light the leaves' first bounce through shadow maps; their emission
+        // then stays out of the bins (§3.3: antiradiance carries indirect light only).
+        let emission = emitters && !sampled;
+        if !emitters {
             d.push("no emitters: no emission term".into());
         }
         let environment = scene.environment.max_element() > 0.0;
@@ -195,7 +208,7 @@ impl Plan {
         Plan {
             features: Features {
                 antiradiance,
-                direct: !scene.lights.is_empty(),
+                direct: !lights.is_empty(),
                 environment,
                 emission,
                 splat,
@@ -213,9 +226,17 @@ impl Plan {
 
     /// Everything on, float32 tables (`--all-passes`); shadow maps for the lights present (a
     /// light type that is absent has nothing to draw).
-    pub fn everything(scene: &Scene, sys: &System, surf: &Surfaces) -> Self {
-        let mut p = Self::analyze(scene, sys, surf, Precision::F32);
-        p.features = Features::ALL;
+    pub fn everything(scene: &Scene, lights: &[Light], sys: &System, surf: &Surfaces) -> Self {
+        let mut p = Self::analyze(scene, lights, sys, surf, Precision::F32);
+        // Sampled emitters are a way of lighting, not a pass to leave out: their emission stays
+        // out of the bins with every pass on too.
+        let sampled = lights
+            .iter()
+            .any(|l| matches!(l, Light::EmitterSample { .. }));
+        p.features = Features {
+            emission: !sampled,
+            ..Features::ALL
+        };
         p.precision = Precision::F32;
         p.precision_fallback = None;
         p.all_passes = true;
@@ -253,15 +274,16 @@ impl Plan {
     /// with `requested` precision.
     pub fn new(
         scene: &Scene,
+        lights: &[Light],
         sys: &System,
         surf: &Surfaces,
         requested: Precision,
         all_passes: bool,
     ) -> Self {
         if all_passes {
-            Self::everything(scene, sys, surf)
+            Self::everything(scene, lights, sys, surf)
         } else {
-            Self::analyze(scene, sys, surf, requested)
+            Self::analyze(scene, lights, sys, surf, requested)
         }
     }
 }

@@ -190,9 +190,9 @@ impl Tracer {
             }
             let dist = match light {
                 Light::Directional { .. } => f64::INFINITY,
-                Light::Point { position, .. } | Light::Spot { position, .. } => {
-                    (*position - origin).length()
-                }
+                Light::Point { position, .. }
+                | Light::Spot { position, .. }
+                | Light::EmitterSample { position, .. } => (*position - origin).length(),
             };
             if !self.caster.occluded(origin, -inc.travel, 0.0, dist) {
                 l += brdf(mat, n, inc.travel, wo) * inc.irradiance * cos;

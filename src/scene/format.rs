@@ -259,4 +259,7 @@ pub struct SolverDesc {
     /// Cone-filter weights below this fraction of a row's largest are dropped, in
     /// [1e-9, 0.5].
     pub filter_cutoff: Option<f64>,
+    /// Shadow-mapped samples of the area emitters, 0..=[`super::MAX_EMITTER_SAMPLES`] (0: their
+    /// emission goes through the bins).
+    pub emitter_samples: Option<i64>,
 }

@@ -102,15 +102,29 @@ pub enum Light {
         /// Beam width (radians).
         beam_width: f64,
     },
+    /// One sample of an area emitter (`Ke` faces), made by the engine, never read from a file
+    /// (`crate::frame::emitters`): a patch of `area` on the emitter at `position` with unit
+    /// `normal`, radiating `radiance` from its front side, cosine-weighted.
+    EmitterSample {
+        /// Point on the emitter.
+        position: DVec3,
+        /// Unit normal of the emitter's front side.
+        normal: DVec3,
+        /// Emitted radiance per channel (W/(m²·sr)).
+        radiance: DVec3,
+        /// Emitter area the sample stands for (m²).
+        area: f64,
+    },
 }
 
 impl Light {
-    /// Short type name (`directional`, `point`, `spot`).
+    /// Short type name (`directional`, `point`, `spot`, `emitter`).
     pub fn kind(&self) -> &'static str {
         match self {
             Light::Directional { .. } => "directional",
             Light::Point { .. } => "point",
             Light::Spot { .. } => "spot",
+            Light::EmitterSample { .. } => "emitter",
         }
     }
 }
@@ -170,7 +184,16 @@ pub struct SolverSettings {
     /// dropped and the row renormalized, in [1e-9, 0.5] ([`crate::filter::CUTOFF`] by default;
     /// the README gives the error each choice costs, measured).
     pub filter_cutoff: f64,
+    /// Area emitters (`Ke` faces) are sampled with this many shadow-mapped points for their
+    /// direct light (per pixel and the leaves' first bounce; §3.3), 0..=[`MAX_EMITTER_SAMPLES`];
+    /// 0 sends their emission through the bins instead. `None` chooses
+    /// ([`crate::frame::emitters::choose`]): [`crate::frame::emitters::DEFAULT_SAMPLES`] unless
+    /// the emitters cover much of the scene.
+    pub emitter_samples: Option<usize>,
 }
+
+/// Most emitter samples (each has six shadow-map faces).
+pub const MAX_EMITTER_SAMPLES: usize = 4096;
 
 impl Default for SolverSettings {
     fn default() -> Self {
@@ -186,6 +209,7 @@ impl Default for SolverSettings {
             tolerance: None,
             max_iterations: 1000,
             filter_cutoff: crate::filter::CUTOFF,
+            emitter_samples: None,
         }
     }
 }

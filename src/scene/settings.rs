@@ -129,6 +129,19 @@ pub fn solver_settings(s: &SolverDesc, path: &Path) -> Result<SolverSettings> {
             "solver.max_iterations",
             path,
         )?,
+        emitter_samples: match s.emitter_samples {
+            None => d.emitter_samples,
+            Some(n) if (0..=super::MAX_EMITTER_SAMPLES as i64).contains(&n) => Some(n as usize),
+            Some(n) => {
+                return Err(scene_err(
+                    path,
+                    format!(
+                        "`solver.emitter_samples` must be 0..={}, got {n}",
+                        super::MAX_EMITTER_SAMPLES
+                    ),
+                ))
+            }
+        },
         filter_cutoff: match s.filter_cutoff {
             None => d.filter_cutoff,
             Some(c) if (1e-9..=0.5).contains(&c) => c,

@@ -17,6 +17,7 @@ pub fn local(s: &mut CpuSolver<'_>, mode: LocalMode) {
     let (l_push, direct, env) = (&s.l_push, s.direct_in.as_ref(), s.environment);
     // Without antiradiance (nothing can occlude) the back bins stay zero.
     let antiradiance = s.antiradiance;
+    let emission = s.emission;
     s.i_ex
         .data
         .par_chunks_mut(m)
@@ -29,6 +30,7 @@ pub fn local(s: &mut CpuSolver<'_>, mode: LocalMode) {
             }
             let leaf = &sys.leaves[slot as usize];
             let mat = &sys.materials[leaf.material as usize];
+            let ke = if emission { mat.ke } else { DVec3::ZERO };
             let (n, c, a) = (leaf.normal, leaf.cos_norm, leaf.area);
             let lp = l_push.row(node);
             let dr = direct.map(|d| d.row(node));
@@ -79,7 +81,7 @@ pub fn local(s: &mut CpuSolver<'_>, mode: LocalMode) {
                         }
                     }
                     tot[j] = base * r_t;
-                    ex[j] = base * (r_t + r_d + mat.ke);
+                    ex[j] = base * (r_t + r_d + ke);
                 } else if cj < 0.0 {
                     if mode == LocalMode::Reflect {
                         continue;

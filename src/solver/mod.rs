@@ -87,6 +87,9 @@ pub struct CpuState {
     /// Whether antiradiance is computed ([`crate::plan::Features::antiradiance`]): off, the
     /// back bins stay zero and the asymmetric scheme runs only its reflection step.
     pub antiradiance: bool,
+    /// Whether emission enters the bins ([`crate::plan::Features::emission`]): off where the
+    /// area emitters' light comes from shadow-mapped samples as direct light (§3.3).
+    pub emission: bool,
 }
 
 impl CpuState {
@@ -104,6 +107,7 @@ impl CpuState {
             energies: Vec::new(),
             propagations: 0,
             antiradiance: true,
+            emission: true,
         }
     }
 }

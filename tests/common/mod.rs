@@ -312,17 +312,22 @@ pub struct Measured {
     /// Median and 90th percentile of |x − r| / r (luminance) over those pixels.
     pub indirect_median: f64,
     pub indirect_p90: f64,
+    /// Relative RMSE of the indirect light alone: the image less the same renderer's
+    /// direct-only image against the reference less its direct part, over the measured pixels
+    /// (the error antiradiance is responsible for, now that direct light is shadow-mapped).
+    pub indirect_rmse: f64,
 }
 
 impl std::fmt::Display for Measured {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "relative RMSE {:.4} over {} pixels (reference noise {:.4}), mean {:+.2}%; indirect-only pixels {}: median {:.1}%, 90th percentile {:.1}%",
+            "relative RMSE {:.4} over {} pixels (reference noise {:.4}), mean {:+.2}%; indirect light: relative RMSE {:.4}; indirect-only pixels {}: median {:.1}%, 90th percentile {:.1}%",
             self.rel_rmse,
             self.pixels,
             self.noise,
             100.0 * self.mean_bias,
+            self.indirect_rmse,
             self.indirect_pixels,
             100.0 * self.indirect_median,
             100.0 * self.indirect_p90
@@ -331,7 +336,11 @@ impl std::fmt::Display for Measured {
 }
 
 /// Measures `image` against `truth` (see [`Measured`]).
-pub fn measure(image: &antiradiance::frame::Image, truth: &Truth) -> Measured {
+pub fn measure(
+    image: &antiradiance::frame::Image,
+    direct: &antiradiance::frame::Image,
+    truth: &Truth,
+) -> Measured {
     let r = &truth.reference;
     let sigma = r
         .std_error
@@ -340,16 +349,21 @@ pub fn measure(image: &antiradiance::frame::Image, truth: &Truth) -> Measured {
     let lum = |p: [f32; 3]| antiradiance::metrics::luminance(p) as f64;
     let (mut n, mut sq, mut sum_r, mut sum_x, mut var) = (0usize, 0.0, 0.0, 0.0, 0.0);
     let mut indirect = Vec::new();
+    let (mut sq_ind, mut sum_ind) = (0.0, 0.0);
     for i in 0..r.image.pixels.len() {
         if !truth.measured[i] {
             continue;
         }
         let (x, y, s) = (image.pixels[i], r.image.pixels[i], sigma.pixels[i]);
+        let (xd, yd) = (direct.pixels[i], r.direct.pixels[i]);
         for c in 0..3 {
             sq += (x[c] as f64 - y[c] as f64).powi(2);
             sum_r += y[c] as f64;
             sum_x += x[c] as f64;
             var += (s[c] as f64).powi(2);
+            let (xi, yi) = (x[c] as f64 - xd[c] as f64, y[c] as f64 - yd[c] as f64);
+            sq_ind += (xi - yi).powi(2);
+            sum_ind += yi;
         }
         n += 1;
         if lum(r.direct.pixels[i]) == 0.0 && lum(y) > 0.0 {
@@ -368,6 +382,7 @@ pub fn measure(image: &antiradiance::frame::Image, truth: &Truth) -> Measured {
     Measured {
         pixels: n,
         rel_rmse: (sq / (3 * n) as f64).sqrt() / mean,
+        indirect_rmse: (sq_ind / (3 * n) as f64).sqrt() / (sum_ind / (3 * n) as f64),
         noise: (var / (3 * n) as f64).sqrt() / mean,
         mean_bias: sum_x / sum_r - 1.0,
         indirect_pixels: indirect.len(),

@@ -1,5 +1,5 @@
 //! Shadow maps (§3.3): every element corner drawn once per light view, each view into its own
-//! band of one R32F image, keeping the nearest linear distance (depth-tested).
+//! square of one R32F atlas, keeping the nearest linear distance (depth-tested).
 
 use super::targets::FrameImages;
 use super::{begin_rendering_with_depth, end_rendering, frame_desc, FramePass, Load};
@@ -43,7 +43,7 @@ pub fn pipeline(
     create(ctx, layout, &desc)
 }
 
-/// Records all `views` views of side `size`.
+/// Records every view, each into its atlas square `rects[v]` (x, y, side).
 #[allow(clippy::too_many_arguments)]
 pub fn record(
     p: &FramePass<'_>,
@@ -51,8 +51,7 @@ pub fn record(
     im: &mut FrameImages<Image>,
     corners: vk::Buffer,
     corner_count: u32,
-    views: u32,
-    size: u32,
+    rects: &[[u32; 3]],
     mut constants: FrameConstants,
 ) {
     transition(
@@ -70,11 +69,11 @@ pub fn record(
         Some((&im.shadow_depth, Load::Clear)),
     );
     p.bind(pipeline, &constants);
-    for v in 0..views {
+    for (v, &[x, y, size]) in rects.iter().enumerate() {
         let band = vk::Rect2D {
             offset: vk::Offset2D {
-                x: 0,
-                y: (v * size) as i32,
+                x: x as i32,
+                y: y as i32,
             },
             extent: vk::Extent2D {
                 width: size,
@@ -86,8 +85,8 @@ pub fn record(
                 p.cmd,
                 0,
                 &[vk::Viewport {
-                    x: 0.0,
-                    y: (v * size) as f32,
+                    x: x as f32,
+                    y: y as f32,
                     width: size as f32,
                     height: size as f32,
                     min_depth: 0.0,
@@ -96,7 +95,7 @@ pub fn record(
             );
             p.ctx.device.cmd_set_scissor(p.cmd, 0, &[band]);
         }
-        constants.misc[1] = v;
+        constants.misc[1] = v as u32;
         p.push(&constants);
         p.draw(corners, corner_count, 1);
     }

@@ -12,7 +12,7 @@ pub const RGBA32F: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 resource_set! {
     /// Images of the frame passes.
     pub struct FrameImages {
-        /// Shadow maps, views stacked vertically (R32F linear distances).
+        /// Shadow maps, every view's in its place of one atlas (R32F linear distances).
         pub shadow_map,
         /// Depth for the shadow-map views.
         pub shadow_depth,
@@ -30,19 +30,13 @@ resource_set! {
 }
 
 impl FrameImages<ImageDesc> {
-    /// The images of a `width × height` frame with `views` shadow views of `shadow_size`²
-    /// texels; the vertex-radiance and splat targets only where `features` draw them.
-    pub fn describe(
-        width: u32,
-        height: u32,
-        features: &Features,
-        shadow_size: u32,
-        views: u32,
-    ) -> Self {
+    /// The images of a `width × height` frame with a shadow-map atlas of `atlas` texels
+    /// (width, height); the vertex-radiance and splat targets only where `features` draw them.
+    pub fn describe(width: u32, height: u32, features: &Features, atlas: (u32, u32)) -> Self {
         let (sw, sh) = (width * SUPERSAMPLE, height * SUPERSAMPLE);
         let frame = |name: &str, w, h, f| ImageDesc::new(name, w, h, f, Purpose::FrameImages);
         let shadow = |name: &str, f| {
-            let (w, h) = (shadow_size.max(1), (shadow_size * views).max(1));
+            let (w, h) = (atlas.0.max(1), atlas.1.max(1));
             ImageDesc::new(name, w, h, f, Purpose::ShadowMaps)
         };
         Self {
