@@ -125,7 +125,7 @@ impl System {
         let mut links = build_links(&hierarchy, &elements, &bins, settings.oracle, max_links)?;
         let filters = FilterTables::new(&bins, &links.used_classes);
         let t1 = Instant::now();
-        crate::linker::exact_leaf_form_factors(&mut links, &hierarchy, &elements, &bins, &filters);
+        crate::linker::calibrate_form_factors(&mut links, &hierarchy, &elements, &bins, &filters);
         links.linking_ms += t1.elapsed().as_secs_f64() * 1e3;
         let leaves: Vec<LeafAttributes> = hierarchy
             .leaves
