@@ -14,8 +14,8 @@ use std::path::PathBuf;
 
 pub use crate::settings::{Precision, Scheme};
 pub use limits::{
-    max_elements_limit, max_links_limit, MAX_ANTIRADIANCE_STEPS, MAX_COORDINATE, MAX_ITERATIONS, MAX_SOURCE,
-    RELATIVE_ELEMENT_SIZE,
+    max_elements_limit, max_links_limit, MAX_ANTIRADIANCE_STEPS, MAX_COORDINATE, MAX_ITERATIONS,
+    MAX_SOURCE, RELATIVE_ELEMENT_SIZE,
 };
 pub use load::load_scene;
 
