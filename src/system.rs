@@ -8,8 +8,10 @@ use crate::error::{Error, Result};
 use crate::filter::FilterTables;
 use crate::hierarchy::Hierarchy;
 use crate::linker::{build_links, Links};
+use crate::plan::occlusion::{self, Occlusion};
 use crate::scene::{Material, Scene, SolverSettings};
 use glam::DVec3;
+use std::collections::HashMap;
 use std::time::Instant;
 
 /// Per-leaf constants of the local pass (the GPU stores them as element attribute images).
@@ -55,6 +57,13 @@ pub struct System {
     pub lobe_norm: Vec<f32>,
     /// For every leaf (index into `leaves`), its block in `lobe_norm`, or `u32::MAX`.
     pub lobe_slot: Vec<u32>,
+    /// Whether antiradiance can reach anything ([`occlusion::analyze`]), when it was needed
+    /// here (closed scenes); the plan reuses it.
+    pub occlusion: Option<Occlusion>,
+    /// Closed scenes only: the spectral radius λ of the calibrated transport at albedo one
+    /// (should be exactly 1: a closed enclosure loses no light), which every form factor was
+    /// divided by. See [`System::conserve_energy`].
+    pub energy_normalization: Option<f64>,
 }
 
 /// Cosine margin of [`System::reads`]: bins this close to a leaf's plane count as read.
@@ -128,7 +137,7 @@ impl System {
         let mut links = build_links(&hierarchy, &elements, &bins, settings.oracle, max_links)?;
         let filters = FilterTables::new(&bins, &links.used_classes, settings.filter_cutoff);
         let t1 = Instant::now();
-        crate::linker::exact_leaf_form_factors(&mut links, &hierarchy, &elements, &bins, &filters);
+        crate::linker::calibrate_form_factors(&mut links, &hierarchy, &elements, &bins, &filters);
         links.linking_ms += t1.elapsed().as_secs_f64() * 1e3;
         let leaves: Vec<LeafAttributes> = hierarchy
             .leaves
@@ -154,7 +163,7 @@ impl System {
             .map(|m| m.is_glossy().then(|| DiscreteLobe::new(m.ns, &bins)))
             .collect();
         let (lobe_norm, lobe_slot) = lobe_factors(&leaves, &lobes, &bins);
-        Ok(Self {
+        let mut sys = Self {
             elements,
             hierarchy,
             bins,
@@ -167,7 +176,39 @@ impl System {
             lobes,
             lobe_norm,
             lobe_slot,
-        })
+            occlusion: None,
+            energy_normalization: None,
+        };
+        if closed_surfaces(scene) {
+            let t2 = Instant::now();
+            sys.conserve_energy(scene);
+            sys.links.linking_ms += t2.elapsed().as_secs_f64() * 1e3;
+        }
+        Ok(sys)
+    }
+
+    /// Makes the discrete transport of a closed scene conserve energy exactly.
+    ///
+    /// In a closed enclosure every bounce keeps all the light: the transport at albedo one has
+    /// spectral radius exactly 1. The calibrated links ([`crate::linker::calibrate_form_factors`])
+    /// get within about 2·10⁻⁴ of it (a cluster receiver pushes one radiance to leaves that
+    /// should get more or less); at ρ = 0.999 that is amplified a thousandfold. Here λ is
+    /// measured by power iteration — propagations of the solver itself (global, push, local,
+    /// pull) with every material white and Lambertian, antiradiance as the plan will run it —
+    /// and every form factor is divided by it, so λ = 1 up to rounding. Skipped (left `None`)
+    /// when λ is not within 5% of 1 (the surfaces are closed but enclose nothing that faces
+    /// in, as a solid alone in the void) or does not converge in [`POWER_ROUNDS`].
+    pub fn conserve_energy(&mut self, scene: &Scene) {
+        let occ = occlusion::analyze(scene);
+        let antiradiance = occ != Occlusion::Impossible;
+        self.occlusion = Some(occ);
+        let lambda = transport_radius(self, antiradiance);
+        if let Some(lambda) = lambda.filter(|l| (l - 1.0).abs() < 0.05) {
+            for l in &mut self.links.links {
+                l.form_factor /= lambda;
+            }
+            self.energy_normalization = Some(lambda);
+        }
     }
 
     /// The lobe factors of leaf `li` per incident bin, or `None` for a non-glossy leaf.
@@ -193,6 +234,144 @@ impl System {
     pub fn rows(&self) -> usize {
         self.hierarchy.len()
     }
+}
+
+/// Power-iteration rounds at most for [`System::conserve_energy`] (a closed box converges to
+/// 10⁻¹² in about 30).
+pub const POWER_ROUNDS: usize = 200;
+
+/// The spectral radius of `sys`'s transport at albedo one (every leaf white and Lambertian),
+/// antiradiance on or off: power iteration from uniform radiance on every front, the flux ratio
+/// of successive propagations until it changes by less than 10⁻¹² (relative). One channel of
+/// exactly the solver's operations ([`crate::solver`]: global with the links' spreading rows,
+/// push, the local pass's reflection and antiradiance, pull), so it needs a third of the
+/// memory of the solver's tables.
+fn transport_radius(sys: &System, antiradiance: bool) -> Option<f64> {
+    use rayon::prelude::*;
+    let (rows, m) = (sys.rows(), sys.bins.count);
+    let h = &sys.hierarchy;
+    let links = &sys.links;
+    let mut i_ex = vec![0.0; rows * m];
+    let mut l_in = vec![0.0; rows * m];
+    let mut l_push = vec![0.0; rows * m];
+    let cos: Vec<Vec<f64>> = sys
+        .leaves
+        .iter()
+        .map(|l| sys.bins.centers.iter().map(|c| c.dot(l.normal)).collect())
+        .collect();
+    let flux = |i_ex: &[f64]| -> f64 {
+        sys.leaves
+            .iter()
+            .zip(&cos)
+            .map(|(l, cj)| {
+                let row = &i_ex[l.node as usize * m..(l.node as usize + 1) * m];
+                row.iter()
+                    .zip(cj)
+                    .filter(|(_, &c)| c > 0.0)
+                    .map(|(v, _)| v)
+                    .sum::<f64>()
+            })
+            .sum()
+    };
+    // Local pass (white Lambertian): front bins a·c·cos·E/π, back bins −a·c·|cos|·L.
+    let local = |i_ex: &mut [f64], l_push: &[f64], uniform: bool| {
+        for (l, cj) in sys.leaves.iter().zip(&cos) {
+            let r = l.node as usize;
+            let lp = &l_push[r * m..(r + 1) * m];
+            let e: f64 = if uniform {
+                std::f64::consts::PI
+            } else {
+                lp.iter()
+                    .zip(cj)
+                    .filter(|(_, &c)| c < 0.0)
+                    .map(|(v, c)| v * -c)
+                    .sum::<f64>()
+                    * sys.bins.omega
+                    * l.cos_norm
+            };
+            let row = &mut i_ex[r * m..(r + 1) * m];
+            for j in 0..m {
+                let k = l.area * l.cos_norm;
+                row[j] = if cj[j] > 0.0 {
+                    k * cj[j] * e / std::f64::consts::PI
+                } else if cj[j] < 0.0 && antiradiance && !uniform {
+                    k * cj[j] * lp[j]
+                } else {
+                    0.0
+                };
+            }
+        }
+        // Pull: children follow their parent in pre-order, so a backward sweep sees them first.
+        for i in (0..h.len()).rev() {
+            if let crate::hierarchy::NodeKind::Cluster([a, b]) = h.nodes[i].kind {
+                for j in 0..m {
+                    i_ex[i * m + j] = i_ex[a as usize * m + j] + i_ex[b as usize * m + j];
+                }
+            }
+        }
+    };
+    local(&mut i_ex, &l_push, true);
+    let mut lambda = f64::NAN;
+    for _ in 0..POWER_ROUNDS {
+        let before = flux(&i_ex);
+        l_in.par_chunks_mut(m).enumerate().for_each(|(r, row)| {
+            row.fill(0.0);
+            for l in &links.links[links.offsets[r] as usize..links.offsets[r + 1] as usize] {
+                let v = i_ex[l.sender as usize * m + l.sender_bin as usize] * l.form_factor;
+                if let Some(spread) = sys.filters.row(l.cone, l.receiver_bin as u32) {
+                    for &(j, w) in spread {
+                        row[j as usize] += v * w as f64;
+                    }
+                }
+            }
+        });
+        for (i, node) in h.nodes.iter().enumerate() {
+            let (head, tail) = l_push.split_at_mut(i * m);
+            let dst = &mut tail[..m];
+            dst.copy_from_slice(&l_in[i * m..(i + 1) * m]);
+            if node.parent != u32::MAX {
+                let p = node.parent as usize;
+                dst.iter_mut()
+                    .zip(&head[p * m..(p + 1) * m])
+                    .for_each(|(d, s)| *d += s);
+            }
+        }
+        local(&mut i_ex, &l_push, false);
+        let ratio = flux(&i_ex) / before;
+        if !ratio.is_finite() || ratio <= 0.0 {
+            return None;
+        }
+        if (ratio - lambda).abs() <= 1e-12 * ratio {
+            return Some(ratio);
+        }
+        lambda = ratio;
+        i_ex.iter_mut().for_each(|v| *v /= ratio);
+    }
+    None
+}
+
+/// True when the scene's triangles form closed, consistently oriented surfaces: every edge is
+/// used as often in one direction as in the other (by exact coordinates, as shared vertices or
+/// coincident corners give them; T-junctions count as open). Then no open edge can be swept
+/// across, and the net number of surfaces a ray from a leaf crosses (front faces minus backs,
+/// what U plus antiradiance delivers from a uniform field) is the same in every direction.
+pub fn closed_surfaces(scene: &Scene) -> bool {
+    let key = |p: DVec3| [p.x + 0.0, p.y + 0.0, p.z + 0.0].map(f64::to_bits);
+    let mut edges: HashMap<([u64; 3], [u64; 3]), i64> = HashMap::new();
+    for mesh in &scene.meshes {
+        for t in &mesh.triangles {
+            for i in 0..3 {
+                let a = key(mesh.positions[t[i] as usize]);
+                let b = key(mesh.positions[t[(i + 1) % 3] as usize]);
+                match a.cmp(&b) {
+                    std::cmp::Ordering::Less => *edges.entry((a, b)).or_default() += 1,
+                    std::cmp::Ordering::Greater => *edges.entry((b, a)).or_default() -= 1,
+                    std::cmp::Ordering::Equal => {}
+                }
+            }
+        }
+    }
+    !edges.is_empty() && edges.values().all(|&c| c == 0)
 }
 
 /// Lobe factors of every glossy leaf (in parallel) and each leaf's block index.

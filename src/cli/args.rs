@@ -64,7 +64,8 @@ pub enum Command {
         json: Option<PathBuf>,
         #[command(flatten)]
         solver: SolverArgs,
-        /// Iterate until the estimated error is below this instead of a fixed count.
+        /// Iterate until the estimated error (distance to the discrete system's fixed point, not
+        /// to the true answer) is below this instead of a fixed count.
         #[arg(long, allow_negative_numbers = true, value_parser = positive)]
         tolerance: Option<f64>,
         /// Iteration cap with --tolerance (default: `solver.max_iterations`, 1000).

@@ -52,7 +52,9 @@ pub struct RenderStats {
     pub residuals: Vec<f64>,
     /// Flux (W, mean of RGB) leaving the leaves' front bins after each iteration.
     pub energies: Vec<f64>,
-    /// Estimated relative distance to the fixed point after the last iteration.
+    /// Estimated relative distance to the discrete system's fixed point after the last
+    /// iteration ([`crate::solver::convergence::Monitor::error_estimate`]): the iteration error,
+    /// not the error against the true answer (the discretization's own error is not in it).
     pub estimated_error: Option<f64>,
     /// Departures from the requested configuration.
     pub fallbacks: Vec<String>,

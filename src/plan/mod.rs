@@ -117,7 +117,12 @@ impl Plan {
     ) -> Self {
         let mut d = Vec::new();
         let f0 = Features::for_system(sys);
-        let antiradiance = match occlusion::analyze(scene) {
+        // A closed scene's system already analysed it (for its energy normalization).
+        let occ = sys
+            .occlusion
+            .clone()
+            .unwrap_or_else(|| occlusion::analyze(scene));
+        let antiradiance = match occ {
             Occlusion::Impossible => {
                 d.push("antiradiance off: no surface lies behind another that faces it, so nothing can occlude (U = G)".to_string());
                 false
@@ -134,6 +139,9 @@ impl Plan {
                 true
             }
         };
+        if let Some(l) = sys.energy_normalization {
+            d.push(format!("closed surfaces: every form factor divided by the transport's spectral radius λ = {l:.6}, so that no light is gained or lost per bounce"));
+        }
         d.push(match (f0.diffuse, f0.glossy) {
             (true, false) => "diffuse fast path only: no glossy material, no BRDF tables".into(),
             (false, true) => "general BRDF pass only: every element is glossy".into(),

@@ -252,7 +252,8 @@ pub struct SolverDesc {
     /// Upper bound on leaf elements (refuses scenes that would exceed it),
     /// 1..=[`super::max_elements_limit`].
     pub max_elements: Option<i64>,
-    /// Residual target in (0, 1) (iterate until the estimated error is below it).
+    /// Residual target in (0, 1) (iterate until the estimated error is below it: the distance to
+    /// the discrete fixed point, not to the true answer).
     pub tolerance: Option<f64>,
     /// Iteration cap when a tolerance is given, 1..=[`super::MAX_ITERATIONS`].
     pub max_iterations: Option<i64>,

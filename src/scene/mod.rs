@@ -176,7 +176,8 @@ pub struct SolverSettings {
     pub max_elements: usize,
     /// Residual target in (0, 1): iterate until the estimated error falls below it (then
     /// `iterations` is ignored and `max_iterations` caps the count). `None`: exactly
-    /// `iterations`.
+    /// `iterations`. The estimate is the distance to the discrete system's fixed point, not to
+    /// the true answer ([`crate::solver::convergence::Monitor::error_estimate`]).
     pub tolerance: Option<f64>,
     /// Iteration cap when `tolerance` is given: 1..=[`MAX_ITERATIONS`].
     pub max_iterations: usize,

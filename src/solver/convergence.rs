@@ -166,8 +166,15 @@ impl Monitor {
     }
 
     /// Estimated distance to the fixed point relative to the solution: the last residual times
-    /// q/(1−q), with q the contraction ratio of the last two changes (a stiff scene with q near 1
-    /// is far from converged even when each step changes little).
+    /// q/(1−q), with q the contraction ratio of the changes over the last eight iterations (a
+    /// stiff scene with q near 1 is far from converged even when each step changes little).
+    ///
+    /// This is the iteration error only: how far the iterate is from the *discrete* system's own
+    /// fixed point, not from the true answer. The discretization (bins, elements, cluster links,
+    /// τ) puts that fixed point off the true radiance by its own error, which no number of
+    /// iterations removes and this estimate does not see: a closed box at ρ = 0.999 whose
+    /// transport lost 2.7% per bounce once "converged" to an estimated error under 1e-4 at a
+    /// mean of 36 instead of 1000.
     pub fn error_estimate(&self) -> Option<f64> {
         let n = self.changes.len();
         let r = *self.residuals.last()?;
