@@ -231,6 +231,7 @@ fn run(cli: Cli) -> Result<()> {
             exposure,
             backend,
             method,
+            baseline,
             shadow_map_size,
             device,
             plan,
@@ -247,6 +248,7 @@ fn run(cli: Cli) -> Result<()> {
             o.height = size.height;
             o.backend = backend;
             o.method = method;
+            o.baseline = baseline.settings();
             o.shadow_map_size = shadow_map_size;
             o.device = device;
             let bars = Bars::default();

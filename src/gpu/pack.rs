@@ -218,7 +218,8 @@ pub fn glossy_terms(sys: &System, lobe_bins: &[u32]) -> u64 {
                 .iter()
                 .filter(|d| d.dot(leaf.normal) > 0.0)
                 .map(|d| {
-                    let (u, v) = crate::bins::direction_to_square(crate::brdf::mirror(*d, leaf.normal));
+                    let (u, v) =
+                        crate::bins::direction_to_square(crate::brdf::mirror(*d, leaf.normal));
                     let iu = (((u + 1.0) * 0.5 * nu as f64) as usize).min(nu - 1);
                     let iv = (((v + 1.0) * 0.5 * nv as f64) as usize).min(nv - 1);
                     let b = iv * nu + iu;
