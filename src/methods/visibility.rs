@@ -211,13 +211,13 @@ mod tests {
             quad(
                 &mut s,
                 "bottom",
-                [v(0., 0., 0.), v(1., 0., 0.), v(1., 0., 1.), v(0., 0., 1.)],
+                [v(0., 0., 0.), v(0., 0., 1.), v(1., 0., 1.), v(1., 0., 0.)],
                 m,
             );
             quad(
                 &mut s,
                 "top",
-                [v(0., 1., 0.), v(0., 1., 1.), v(1., 1., 1.), v(1., 1., 0.)],
+                [v(0., 1., 0.), v(1., 1., 0.), v(1., 1., 1.), v(0., 1., 1.)],
                 m,
             );
             if screen {
@@ -239,21 +239,39 @@ mod tests {
             let sys = System::build(&s).unwrap();
             let caster = RayCaster::new(&sys);
             let (vis, stats) = link_visibility(&sys, &caster, 64);
-            let between: Vec<f64> = sys
-                .links
-                .links
-                .iter()
-                .zip(&vis)
-                .filter(|(l, _)| {
-                    let y = |n: u32| sys.hierarchy.nodes[n as usize].center.y;
-                    (y(l.receiver) - y(l.sender)).abs() > 0.9
-                })
-                .map(|(_, v)| *v)
-                .collect();
-            let mean = between.iter().sum::<f64>() / between.len() as f64;
+            // Links between the two squares, weighted by the transport they carry (∝ the two
+            // areas over the squared distance): by symmetry half of it crosses x < 0.5.
+            let node = |n: u32| &sys.hierarchy.nodes[n as usize];
+            let (mut sum, mut weight, mut count) = (0.0, 0.0, 0);
+            for (l, v) in sys.links.links.iter().zip(&vis) {
+                let (r, s) = (node(l.receiver), node(l.sender));
+                if (r.center.y - s.center.y).abs() < 0.9 {
+                    continue;
+                }
+                let w = r.area * s.area / (r.center - s.center).length_squared();
+                sum += w * v;
+                weight += w;
+                count += 1;
+                // Leaves both left of the screen's edge see each other through it; both right,
+                // past it.
+                let side = |n: u32| {
+                    let e = sys.hierarchy.element(n)?;
+                    let xs = sys.elements[e as usize].corners.map(|c| c.x);
+                    let (lo, hi) = (
+                        xs.iter().cloned().fold(9.0, f64::min),
+                        xs.iter().cloned().fold(-9.0, f64::max),
+                    );
+                    (hi <= 0.5).then_some(-1).or((lo >= 0.5).then_some(1))
+                };
+                match (side(l.receiver), side(l.sender)) {
+                    (Some(-1), Some(-1)) if screen => assert_eq!(*v, 0.0),
+                    (Some(1), Some(1)) => assert_eq!(*v, 1.0),
+                    _ => {}
+                }
+            }
+            let mean = sum / weight;
             println!(
-                "screen {screen}: {} links between the squares, mean visibility {mean:.3}, {stats:?}",
-                between.len()
+                "screen {screen}: {count} links between the squares, transport-weighted visibility {mean:.3}, {stats:?}"
             );
             if screen {
                 assert!((mean - 0.5).abs() < 0.1, "{mean}");

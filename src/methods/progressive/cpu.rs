@@ -4,7 +4,7 @@
 //! frame of the antiradiance CPU backend.
 
 use super::{
-    direct_irradiance, environment_irradiance, kernel, receive, shots_per_iteration,
+    direct_irradiance, environment_irradiance, facing, kernel, receive, shots_per_iteration,
     surface_offset, Elements, State, TableShape,
 };
 use crate::engine::{Backend, Prepared};
@@ -102,24 +102,26 @@ impl CpuShooting {
         let got: Vec<f64> = (0..els.len())
             .into_par_iter()
             .map(|i| {
-                if i == s {
+                if i == s || !facing(els, s, i) {
                     return 0.0;
                 }
                 let (n, c) = (els.normal[i], &els.corners[i]);
-                receive(settings, |b| {
-                    let x = c[0] * b[0] + c[1] * b[1] + c[2] * b[2];
-                    let k = kernel(els, s, x, n);
-                    if k <= 0.0 {
-                        return 0.0;
-                    }
+                let point = |b: [f64; 3]| c[0] * b[0] + c[1] * b[1] + c[2] * b[2];
+                // Seen from the shooter's eye, in front of its surface.
+                let visible = |x: DVec3| {
                     let d = x + n * eps - eye;
                     let len = d.length();
-                    if caster.occluded(eye, d / len, 0.0, len) {
-                        0.0
-                    } else {
-                        k
-                    }
-                })
+                    d.dot(els.normal[s]) > 0.0 && !caster.occluded(eye, d / len, 0.0, len)
+                };
+                receive(
+                    settings,
+                    |b| {
+                        let x = point(b);
+                        let k = kernel(els, s, x, n);
+                        (k, k > 0.0 && visible(x))
+                    },
+                    |b| visible(point(b)),
+                )
                 .0
             })
             .collect();

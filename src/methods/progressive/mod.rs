@@ -7,11 +7,12 @@
 //!
 //! What each element receives from a shot is the shooter's radiance `U/π` times the projected
 //! solid angle of the shooter's triangle (exact, Lambert's polygon formula) seen from points of
-//! the receiver, visibility tested from the shooter's center. **Adaptive subdivision**: a receiver
-//! is integrated over its 4 sub-triangles (centroids); where those samples spread by more than
-//! `gradient` of their largest (a shadow boundary or the near field of the shooter crosses the
-//! element), over 16, and so on to 4^`subdivision`. It refines the integration of each shot over
-//! the receiver, not the displayed resolution: the frame draws one value per element, as for
+//! the receiver, visibility tested from the shooter's center. **Adaptive subdivision** where the
+//! received light's gradient is large ([`receive`]): a receiver takes its centroid's value unless
+//! the visibility at three probes differs from the centroid's (a shadow boundary crosses it);
+//! then it is integrated over its 4 sub-triangles, over 16 where those spread by more than
+//! `gradient` of their largest, and so on to 4^`subdivision`. It refines each shot's integration
+//! over the receiver, not the displayed resolution: the frame draws one value per element, as for
 //! antiradiance.
 //!
 //! Sources as in antiradiance: area emitters (`Ke`) shoot their exitance π·Ke; analytic lights'
@@ -231,23 +232,43 @@ pub fn subtriangle_centroid(level: u32, k: u32) -> [f64; 3] {
     std::array::from_fn(|i| (c[0][i] + c[1][i] + c[2][i]) / 3.0)
 }
 
-/// What a receiver gets from one shot, as a fraction of the shooter's radiance: the mean of
-/// `f` (projected solid angle × visibility at a point given by barycentric coordinates) over the
-/// receiver, adaptively refined (module docs). Returns the mean and the samples taken.
-pub fn receive(settings: &MethodSettings, mut f: impl FnMut([f64; 3]) -> f64) -> (f64, u32) {
-    if settings.subdivision == 0 {
-        return (f([1.0 / 3.0; 3]), 1);
+/// Barycentric probes of a receiver's visibility beside its centroid: the centroids of its three
+/// corner sub-triangles (inside the element, off the edges it shares with its neighbours).
+pub const PROBES: [[f64; 3]; 3] = [
+    [2.0 / 3.0, 1.0 / 6.0, 1.0 / 6.0],
+    [1.0 / 6.0, 2.0 / 3.0, 1.0 / 6.0],
+    [1.0 / 6.0, 1.0 / 6.0, 2.0 / 3.0],
+];
+
+/// What a receiver gets from one shot, as a fraction of the shooter's radiance: `sample(b)` gives
+/// the kernel (projected solid angle) and the visibility at the point with barycentric
+/// coordinates `b`, `visible(b)` the visibility alone. The centroid's kernel × visibility, unless
+/// the visibility at [`PROBES`] differs from the centroid's (a shadow boundary crosses the
+/// element): then the mean over its 4 sub-triangle centroids, over 16 where those spread by more
+/// than `gradient` of their largest, and so on to 4^`subdivision`. Returns the mean and the
+/// kernels evaluated. A smooth kernel needs no refinement: the centroid rule is exact to first
+/// order, and the shooters around a point tile its hemisphere exactly.
+pub fn receive(
+    settings: &MethodSettings,
+    mut sample: impl FnMut([f64; 3]) -> (f64, bool),
+    mut visible: impl FnMut([f64; 3]) -> bool,
+) -> (f64, u32) {
+    let (k, v) = sample([1.0 / 3.0; 3]);
+    let centroid = if v { k } else { 0.0 };
+    if settings.subdivision == 0 || PROBES.iter().all(|&b| visible(b) == v) {
+        return (centroid, 1);
     }
-    let mut taken = 0;
+    let mut taken = 1;
     let mut level = 1;
     loop {
         let n = 1u32 << (2 * level);
         let (mut sum, mut lo, mut hi) = (0.0, f64::INFINITY, 0.0f64);
-        for k in 0..n {
-            let v = f(subtriangle_centroid(level, k));
-            sum += v;
-            lo = lo.min(v);
-            hi = hi.max(v);
+        for j in 0..n {
+            let (k, v) = sample(subtriangle_centroid(level, j));
+            let x = if v { k } else { 0.0 };
+            sum += x;
+            lo = lo.min(x);
+            hi = hi.max(x);
         }
         taken += n;
         if level >= settings.subdivision || hi - lo <= settings.gradient * hi {
@@ -255,6 +276,17 @@ pub fn receive(settings: &MethodSettings, mut f: impl FnMut([f64; 3]) -> f64) ->
         }
         level += 1;
     }
+}
+
+/// Whether shooter `s` and receiver `r` can exchange light at all: part of each lies in front of
+/// the other's plane (else every kernel is zero, and the receiver is skipped).
+pub fn facing(els: &Elements, s: usize, r: usize) -> bool {
+    let front = |a: usize, b: usize| {
+        els.corners[b]
+            .iter()
+            .any(|p| (*p - els.center[a]).dot(els.normal[a]) > 0.0)
+    };
+    front(s, r) && front(r, s)
 }
 
 /// The shot's kernel at receiver point `x` (normal `n`) from shooter `s`: the projected solid
@@ -367,17 +399,27 @@ mod tests {
     }
 
     #[test]
-    fn adaptive_receive_refines_only_where_samples_differ() {
+    fn adaptive_receive_refines_only_where_visibility_changes() {
         let s = MethodSettings {
             subdivision: 3,
             gradient: 0.1,
             ..Default::default()
         };
-        // Constant: 4 samples suffice.
-        assert_eq!(receive(&s, |_| 2.0), (2.0, 4));
-        // A step across the element: refined to the deepest level, area-exact there.
-        let (v, n) = receive(&s, |b| if b[0] > 0.5 { 1.0 } else { 0.0 });
-        assert_eq!(n, 4 + 16 + 64);
+        // Visible everywhere, smooth kernel: the centroid alone.
+        assert_eq!(
+            receive(&s, |b| (1.0 + b[0], true), |_| true),
+            (4.0 / 3.0, 1)
+        );
+        // A shadow edge across the element: refined to the deepest level, area-exact there.
+        let lit = |b: [f64; 3]| b[0] > 0.5;
+        let (v, n) = receive(&s, |b| (1.0, lit(b)), lit);
+        assert_eq!(n, 1 + 4 + 16 + 64);
         assert!((v - 0.25).abs() < 0.05, "{v}");
+        // Without subdivision the centroid decides.
+        let off = MethodSettings {
+            subdivision: 0,
+            ..s
+        };
+        assert_eq!(receive(&off, |b| (1.0, lit(b)), lit), (0.0, 1));
     }
 }
