@@ -122,9 +122,10 @@ pub enum Command {
         #[arg(long)]
         json: Option<PathBuf>,
     },
-    /// Error against run time: antiradiance over a sweep of settings and the path tracer at
-    /// increasing spp, measured against a reference; writes study.csv, error-vs-time.png and
-    /// convergence.png into --out.
+    /// Error against run time: antiradiance over a sweep of settings, the baselines
+    /// (hierarchical radiosity, progressive refinement) and the path tracer at increasing spp,
+    /// measured against a reference; writes study.csv, error-vs-time.png and convergence.png
+    /// into --out.
     Study {
         /// Scene TOML (default: the bundled Cornell box).
         scene: Option<PathBuf>,
@@ -147,6 +148,18 @@ pub enum Command {
         /// Path tracer sample counts, comma-separated (default 1,4,16,64,256).
         #[arg(long, value_delimiter = ',')]
         spp: Option<Vec<u32>>,
+        /// Methods measured, comma-separated (default: all three; the baselines run at the
+        /// scene's settings, after every iteration like antiradiance).
+        #[arg(long, value_enum, value_delimiter = ',')]
+        methods: Option<Vec<Method>>,
+        /// hierarchical-radiosity: visibility rays per link to try, comma-separated (default
+        /// 4,16,32,141).
+        #[arg(long, value_delimiter = ',')]
+        rays_per_link: Option<Vec<u32>>,
+        /// progressive-radiosity: receiver subdivision levels to try, comma-separated (default
+        /// 0,2).
+        #[arg(long, value_delimiter = ',')]
+        subdivisions: Option<Vec<u32>>,
         /// Skip the run with the other iteration scheme.
         #[arg(long)]
         one_scheme: bool,
