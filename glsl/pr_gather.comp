@@ -2,8 +2,8 @@
 // Progressive refinement, one shot received (one invocation per element, after Coombe and
 // Harris's reconstruction pass): the shooter's radiance U/π times the exact projected solid angle
 // of its triangle at sample points of the receiver, each visible when the hemicube's item buffer
-// holds the receiver there or nothing nearer; adaptively subdivided where the samples differ
-// (src/methods/progressive/mod.rs `receive`). Adds to the gathered irradiance and, times the
+// holds the receiver there or nothing nearer; adaptively subdivided where visibility changes
+// across the receiver and the samples differ (src/methods/progressive/mod.rs `receive`). Adds to the gathered irradiance and, times the
 // albedo, to the unshot radiosity; the shooter's unshot radiosity becomes zero.
 #extension GL_GOOGLE_include_directive : require
 #include "pr_common.glsl"
@@ -72,15 +72,39 @@ void main() {
     vec3 t, b;
     pr_basis(n, t, b);
     vec3 nr = R.normal.xyz;
-    float got = 0.0;
-    uint level = pc.subdivision == 0u ? 0u : 1u;
-    while (true) {
+    // Nothing passes unless part of each lies in front of the other (`facing` on the CPU).
+    bool r_front = max(max(dot(R.c0_area.xyz - S.center.xyz, n), dot(R.c1.xyz - S.center.xyz, n)),
+                       dot(R.c2.xyz - S.center.xyz, n)) > 0.0;
+    bool s_front = max(max(dot(S.c0_area.xyz - R.center.xyz, nr), dot(S.c1.xyz - R.center.xyz, nr)),
+                       dot(S.c2.xyz - R.center.xyz, nr)) > 0.0;
+    if (!r_front || !s_front) {
+        return;
+    }
+    // The centroid, unless the visibility at three probes differs from its own (a shadow
+    // boundary crosses the receiver): then 4, 16, ... sub-triangles (`receive` on the CPU).
+    vec3 xc = (R.c0_area.xyz + R.c1.xyz + R.c2.xyz) / 3.0;
+    float kc = dot(xc - S.center.xyz, n) > 0.0
+        ? pr_projected_solid_angle(xc, nr, S.c0_area.xyz, S.c1.xyz, S.c2.xyz)
+        : 0.0;
+    bool vc = kc > 0.0 && visible(xc, r, nr, eye, n, t, b);
+    float got = vc ? kc : 0.0;
+    bool refine = false;
+    if (pc.subdivision > 0u) {
+        for (int j = 0; j < 3; j++) {
+            vec3 w = vec3(1.0 / 6.0);
+            w[j] = 2.0 / 3.0;
+            vec3 x = w.x * R.c0_area.xyz + w.y * R.c1.xyz + w.z * R.c2.xyz;
+            refine = refine || visible(x, r, nr, eye, n, t, b) != vc;
+        }
+    }
+    uint level = 1u;
+    while (refine) {
         uint count = 1u << (2u * level);
         float sum = 0.0;
         float lo = 3.0e38;
         float hi = 0.0;
         for (uint k = 0u; k < count; k++) {
-            vec3 w = level == 0u ? vec3(1.0 / 3.0) : pr_subtriangle(level, k);
+            vec3 w = pr_subtriangle(level, k);
             vec3 x = w.x * R.c0_area.xyz + w.y * R.c1.xyz + w.z * R.c2.xyz;
             float v = 0.0;
             if (dot(x - S.center.xyz, n) > 0.0) {
@@ -93,10 +117,8 @@ void main() {
             lo = min(lo, v);
             hi = max(hi, v);
         }
-        if (level == 0u || level >= pc.subdivision || hi - lo <= pc.gradient * hi) {
-            got = sum / float(count);
-            break;
-        }
+        got = sum / float(count);
+        refine = level < pc.subdivision && hi - lo > pc.gradient * hi;
         level++;
     }
     vec3 dh = shot.unshot.rgb / PR_PI * got;

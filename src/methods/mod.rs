@@ -46,7 +46,7 @@ impl Default for MethodSettings {
 
 /// Default visibility rays per link of hierarchical radiosity (README, "Baselines": chosen by
 /// measurement on the Cornell box).
-pub const DEFAULT_RAYS_PER_LINK: u32 = 32;
+pub const DEFAULT_RAYS_PER_LINK: u32 = 16;
 
 /// Default side of a hemicube face of progressive refinement's item buffer (texels).
 pub const DEFAULT_HEMICUBE: u32 = 128;
