@@ -19,6 +19,7 @@ pub mod gpu;
 pub mod hierarchy;
 pub mod info;
 pub mod linker;
+pub mod methods;
 pub mod metrics;
 pub mod plan;
 pub mod profile;

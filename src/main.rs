@@ -105,6 +105,9 @@ fn run(cli: Cli) -> Result<()> {
             bins,
             element_sizes,
             spp,
+            methods,
+            rays_per_link,
+            subdivisions,
             one_scheme,
             one_precision,
             backend,
@@ -122,6 +125,9 @@ fn run(cli: Cli) -> Result<()> {
             o.bins = bins.unwrap_or(o.bins);
             o.element_sizes = element_sizes.unwrap_or(o.element_sizes);
             o.spp = spp.unwrap_or(o.spp);
+            o.methods = methods.unwrap_or(o.methods);
+            o.rays_per_link = rays_per_link.unwrap_or(o.rays_per_link);
+            o.subdivisions = subdivisions.unwrap_or(o.subdivisions);
             o.both_schemes = !one_scheme;
             o.both_precisions = !one_precision;
             o.render.backend = backend;
@@ -231,6 +237,7 @@ fn run(cli: Cli) -> Result<()> {
             exposure,
             backend,
             method,
+            baseline,
             shadow_map_size,
             device,
             plan,
@@ -247,6 +254,7 @@ fn run(cli: Cli) -> Result<()> {
             o.height = size.height;
             o.backend = backend;
             o.method = method;
+            o.baseline = baseline.settings();
             o.shadow_map_size = shadow_map_size;
             o.device = device;
             let bars = Bars::default();

@@ -124,8 +124,37 @@ pub enum Method {
     /// Implicit visibility with antiradiance (the paper).
     #[default]
     Antiradiance,
+    /// Hierarchical radiosity with clustering on the same links, each given a visibility
+    /// fraction by rays, solved without antiradiance (the paper's Fig. 14f).
+    HierarchicalRadiosity,
+    /// Progressive refinement radiosity (Coombe and Harris, GPU Gems 2 ch. 39): the element
+    /// with the most unshot energy shoots, visibility from a hemicube item buffer.
+    ProgressiveRadiosity,
 }
-spelled!(Method, "method", [(Antiradiance, "antiradiance")]);
+spelled!(
+    Method,
+    "method",
+    [
+        (Antiradiance, "antiradiance"),
+        (HierarchicalRadiosity, "hierarchical-radiosity"),
+        (ProgressiveRadiosity, "progressive-radiosity")
+    ]
+);
+
+impl Method {
+    /// Every method, in the order reports list them.
+    pub const ALL: [Method; 3] = [
+        Method::Antiradiance,
+        Method::HierarchicalRadiosity,
+        Method::ProgressiveRadiosity,
+    ];
+
+    /// Whether the method solves on the links (progressive refinement computes its form
+    /// factors per shot and needs none, so linking is skipped).
+    pub fn uses_links(self) -> bool {
+        self != Method::ProgressiveRadiosity
+    }
+}
 
 #[cfg(test)]
 mod tests {
@@ -146,6 +175,12 @@ mod tests {
         for b in [BackendKind::Gpu, BackendKind::Cpu] {
             assert_eq!(b.to_string().parse::<BackendKind>(), Ok(b));
             assert_eq!(serde_json::to_string(&b).unwrap(), format!("\"{b}\""));
+        }
+        for m in Method::ALL {
+            assert_eq!(m.to_string().parse::<Method>(), Ok(m));
+            assert_eq!(serde_json::to_string(&m).unwrap(), format!("\"{m}\""));
+            let v = <Method as clap::ValueEnum>::to_possible_value(&m).unwrap();
+            assert_eq!(v.get_name(), m.as_str());
         }
         // f64 is reported, not offered on the command line.
         let names: Vec<_> = <Precision as clap::ValueEnum>::value_variants()

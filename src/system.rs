@@ -100,6 +100,17 @@ impl System {
         settings: &SolverSettings,
         budget: &dyn Fn(u64, usize) -> Result<()>,
     ) -> Result<Self> {
+        Self::build_linked(scene, settings, budget, true)
+    }
+
+    /// [`System::build_with`], linking only when `link` (a method that computes its own form
+    /// factors, like progressive refinement, gets an empty link set and spends no time on it).
+    pub fn build_linked(
+        scene: &Scene,
+        settings: &SolverSettings,
+        budget: &dyn Fn(u64, usize) -> Result<()>,
+        link: bool,
+    ) -> Result<Self> {
         let t0 = Instant::now();
         let bins = Bins::new(settings.bins)?;
         let elements = build_elements(scene, settings)?;
@@ -123,7 +134,7 @@ impl System {
         let meshing_ms = t0.elapsed().as_secs_f64() * 1e3;
         let max_links = crate::scene::max_links_limit();
         let estimate = estimate_links(elements.len(), bins.count, settings.oracle);
-        if estimate > max_links as f64 {
+        if link && estimate > max_links as f64 {
             return Err(Error::Setting {
                 field: "oracle",
                 message: format!(
@@ -134,7 +145,15 @@ impl System {
                 ),
             });
         }
-        let mut links = build_links(&hierarchy, &elements, &bins, settings.oracle, max_links)?;
+        let mut links = if link {
+            build_links(&hierarchy, &elements, &bins, settings.oracle, max_links)?
+        } else {
+            Links {
+                offsets: vec![0; hierarchy.len() + 1],
+                used_classes: vec![false; crate::filter::class_count(&bins)],
+                ..Links::default()
+            }
+        };
         let filters = FilterTables::new(&bins, &links.used_classes, settings.filter_cutoff);
         let t1 = Instant::now();
         crate::linker::calibrate_form_factors(&mut links, &hierarchy, &elements, &bins, &filters);

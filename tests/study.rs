@@ -74,6 +74,8 @@ fn tiny_study_writes_csv_and_plots() {
     o.bins = vec![32, 64];
     o.element_sizes = vec![0.25];
     o.spp = vec![1, 4, 16];
+    o.rays_per_link = vec![4, 16];
+    o.subdivisions = vec![0, 2];
     let ctx = context();
     o.render = Options {
         context: Some(ctx.clone()),
@@ -88,19 +90,29 @@ fn tiny_study_writes_csv_and_plots() {
     let cross = study::write(&rows, &dir).unwrap();
     println!("crossover: {cross:?}");
     // base, 64 bins (32 is the base), elem 0.25, asymmetric, f32: 5 configurations × 2
-    // iterations, plus 3 path tracer runs.
-    assert_eq!(rows.len(), 13);
-    assert_eq!(logged, 13);
+    // iterations; hierarchical radiosity at 4 and 16 rays per link and progressive refinement at
+    // subdivision 0 and 2, × 2 iterations; plus 3 path tracer runs.
+    assert_eq!(rows.len(), 21);
+    assert_eq!(logged, 21);
     let csv = std::fs::read_to_string(dir.join("study.csv")).unwrap();
     let lines: Vec<&str> = csv.lines().collect();
     assert_eq!(lines[0], CSV_HEADER);
-    assert_eq!(lines.len(), 14);
+    assert_eq!(lines.len(), 22);
     let cols = CSV_HEADER.split(',').count();
     let families: Vec<&str> = lines[1..]
         .iter()
         .map(|l| l.split(',').nth(1).unwrap())
         .collect();
-    for f in ["base", "bins", "element_size", "scheme", "precision", "spp"] {
+    for f in [
+        "base",
+        "bins",
+        "element_size",
+        "scheme",
+        "precision",
+        "rays_per_link",
+        "subdivision",
+        "spp",
+    ] {
         assert!(families.contains(&f), "no {f} rows");
     }
     for l in &lines[1..] {
@@ -109,8 +121,14 @@ fn tiny_study_writes_csv_and_plots() {
     for r in &rows {
         assert!(r.frame_ms > 0.0 && r.full.rel_rmse.is_finite() && r.full.flip >= 0.0);
         assert!(r.indirect.is_some());
-        if r.method == "antiradiance" {
-            assert!(r.linking_ms > 0.0 && r.residual.is_some() && r.links.unwrap() > 0);
+        match r.method {
+            "antiradiance" | "hierarchical-radiosity" => {
+                assert!(r.linking_ms > 0.0 && r.residual.is_some() && r.links.unwrap() > 0)
+            }
+            "progressive-radiosity" => {
+                assert!(r.links == Some(0) && r.shots.unwrap() > 0 && r.subdivision.is_some())
+            }
+            _ => assert_eq!(r.method, "pathtracer"),
         }
     }
     // The path tracer's error falls as samples grow (16× the samples: about 4× less noise).

@@ -79,9 +79,12 @@ pub enum Command {
         /// Which implementation solves and draws.
         #[arg(long, value_enum, default_value_t = BackendKind::Gpu)]
         backend: BackendKind,
-        /// How global illumination is computed.
+        /// How global illumination is computed: the paper's method, or a baseline on the same
+        /// scene, direct light and frame (README, "Baselines").
         #[arg(long, value_enum, default_value_t = Method::Antiradiance)]
         method: Method,
+        #[command(flatten)]
+        baseline: BaselineArgs,
         /// Shadow map side in texels.
         #[arg(long, default_value_t = 1024)]
         shadow_map_size: u32,
@@ -120,9 +123,10 @@ pub enum Command {
         #[arg(long)]
         json: Option<PathBuf>,
     },
-    /// Error against run time: antiradiance over a sweep of settings and the path tracer at
-    /// increasing spp, measured against a reference; writes study.csv, error-vs-time.png and
-    /// convergence.png into --out.
+    /// Error against run time: antiradiance over a sweep of settings, the baselines
+    /// (hierarchical radiosity, progressive refinement) and the path tracer at increasing spp,
+    /// measured against a reference; writes study.csv, error-vs-time.png and convergence.png
+    /// into --out.
     Study {
         /// Scene TOML (default: the bundled Cornell box).
         scene: Option<PathBuf>,
@@ -145,6 +149,18 @@ pub enum Command {
         /// Path tracer sample counts, comma-separated (default 1,4,16,64,256).
         #[arg(long, value_delimiter = ',')]
         spp: Option<Vec<u32>>,
+        /// Methods measured, comma-separated (default: all three; the baselines run at the
+        /// scene's settings, after every iteration like antiradiance).
+        #[arg(long, value_enum, value_delimiter = ',')]
+        methods: Option<Vec<Method>>,
+        /// hierarchical-radiosity: visibility rays per link to try, comma-separated (default
+        /// 4,16,32,141).
+        #[arg(long, value_delimiter = ',')]
+        rays_per_link: Option<Vec<u32>>,
+        /// progressive-radiosity: receiver subdivision levels to try, comma-separated (default
+        /// 0,2).
+        #[arg(long, value_delimiter = ',')]
+        subdivisions: Option<Vec<u32>>,
         /// Skip the run with the other iteration scheme.
         #[arg(long)]
         one_scheme: bool,
@@ -230,6 +246,41 @@ impl SolverArgs {
             filter_cutoff: self.filter_cutoff,
             emitter_samples: self.emitter_samples.map(|n| n as usize),
             ..Default::default()
+        }
+    }
+}
+
+/// Settings of the baseline methods.
+#[derive(Args)]
+pub struct BaselineArgs {
+    /// hierarchical-radiosity: visibility rays per link.
+    #[arg(long, default_value_t = antiradiance::methods::DEFAULT_RAYS_PER_LINK)]
+    pub rays_per_link: u32,
+    /// progressive-radiosity: side of a hemicube face of the item buffer (texels).
+    #[arg(long, default_value_t = antiradiance::methods::DEFAULT_HEMICUBE)]
+    pub hemicube: u32,
+    /// progressive-radiosity: deepest adaptive subdivision of a receiver (0: its centroid; L:
+    /// up to 4^L sub-triangles where one shot's light varies across it).
+    #[arg(long, default_value_t = antiradiance::methods::DEFAULT_SUBDIVISION)]
+    pub subdivision: u32,
+    /// progressive-radiosity: subdivide a receiver further when its samples spread by more than
+    /// this fraction of their largest.
+    #[arg(long, default_value_t = antiradiance::methods::DEFAULT_GRADIENT, value_parser = finite)]
+    pub gradient: f64,
+    /// progressive-radiosity: shots per iteration (default: a quarter of the elements).
+    #[arg(long)]
+    pub shots_per_iteration: Option<u32>,
+}
+
+impl BaselineArgs {
+    /// The settings these flags give.
+    pub fn settings(&self) -> antiradiance::methods::MethodSettings {
+        antiradiance::methods::MethodSettings {
+            rays_per_link: self.rays_per_link,
+            hemicube: self.hemicube,
+            subdivision: self.subdivision,
+            gradient: self.gradient,
+            shots_per_iteration: self.shots_per_iteration,
         }
     }
 }

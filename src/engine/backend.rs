@@ -54,13 +54,18 @@ pub trait Backend {
     fn memory(&self) -> MemoryReport;
     /// The GPU backend, for recording into a host's command buffers.
     fn as_gpu(&mut self) -> Option<&mut super::gpu::GpuBackend>;
+    /// What a baseline method reports of its own (`None` for antiradiance).
+    fn method_report(&self) -> Option<crate::methods::MethodReport> {
+        None
+    }
 }
 
 /// Makes the backend of `options.method` on `options.backend` for `prep`; GPU backends use
-/// `ctx`.
+/// `ctx`. A method may first transform the prepared system (hierarchical radiosity puts its
+/// visibility into the links and turns antiradiance off).
 pub fn create(
     options: &super::Options,
-    prep: &Prepared,
+    prep: &mut Prepared,
     ctx: Option<Arc<Context>>,
 ) -> Result<Box<dyn Backend>> {
     let gpu = || {
@@ -68,10 +73,27 @@ pub fn create(
             crate::error::Error::Device("the GPU backend needs a Vulkan context".into())
         })
     };
+    use crate::methods::{hierarchical, progressive};
     Ok(match (options.method, options.backend) {
         (Method::Antiradiance, BackendKind::Cpu) => Box::new(super::cpu::CpuBackend::new(prep)),
         (Method::Antiradiance, BackendKind::Gpu) => {
             Box::new(super::gpu::GpuBackend::new(gpu()?, prep, options.gpu)?)
         }
+        (Method::HierarchicalRadiosity, kind) => {
+            let report = hierarchical::prepare(prep, &options.baseline)?;
+            let inner: Box<dyn Backend> = match kind {
+                BackendKind::Cpu => Box::new(super::cpu::CpuBackend::new(prep)),
+                BackendKind::Gpu => {
+                    Box::new(super::gpu::GpuBackend::new(gpu()?, prep, options.gpu)?)
+                }
+            };
+            Box::new(hierarchical::HierarchicalBackend::new(inner, report))
+        }
+        (Method::ProgressiveRadiosity, BackendKind::Cpu) => {
+            Box::new(progressive::cpu::CpuShooting::new(prep, &options.baseline)?)
+        }
+        (Method::ProgressiveRadiosity, BackendKind::Gpu) => Box::new(
+            progressive::gpu::GpuShooting::new(gpu()?, prep, &options.baseline)?,
+        ),
     })
 }

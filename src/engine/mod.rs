@@ -103,8 +103,9 @@ impl Engine {
         progress: &dyn Progress,
     ) -> Result<Self> {
         let setup_start = Instant::now();
-        let mut backend = backend::create(options, &prep, ctx)?;
+        let mut backend = backend::create(options, &mut prep, ctx)?;
         let created_ms = ms(setup_start);
+        let method_ms = backend.method_report().map_or(0.0, |r| r.setup_ms);
         let mut fallbacks = prep.fallbacks.clone();
         if options.backend == BackendKind::Gpu {
             fallbacks.extend(prep.plan.precision_fallback.clone());
@@ -127,7 +128,8 @@ impl Engine {
             linking_ms: prep.system.meshing_ms + prep.system.links.linking_ms,
             uploads_ms: gpu.uploads_ms,
             pipelines_ms: gpu.pipelines_ms,
-            other_ms: (created_ms - gpu.uploads_ms - gpu.pipelines_ms).max(0.0),
+            method_ms,
+            other_ms: (created_ms - gpu.uploads_ms - gpu.pipelines_ms - method_ms).max(0.0),
             lights_ms: ms(t),
         };
         Ok(Self {
@@ -358,6 +360,7 @@ impl Engine {
             estimated_error: outcome.estimated_error,
             fallbacks,
             warnings: outcome.warnings,
+            method_report: self.backend.method_report(),
         };
         let i_total = self.backend.i_total()?;
         Ok((

@@ -95,6 +95,8 @@ pub struct Options {
     pub target_error: Option<f64>,
     /// GPU knobs for tests.
     pub gpu: GpuTuning,
+    /// Settings of the baseline methods (rays per link, hemicube, subdivision, shots).
+    pub baseline: crate::methods::MethodSettings,
 }
 
 impl Default for Options {
@@ -112,6 +114,7 @@ impl Default for Options {
             all_passes: false,
             target_error: None,
             gpu: GpuTuning::default(),
+            baseline: crate::methods::MethodSettings::default(),
         }
     }
 }
@@ -211,6 +214,7 @@ impl Options {
         if let Some(b) = self.solver.bins {
             crate::bins::Bins::new(b).map_err(|e| Error::Invalid(format!("--bins: {e}")))?;
         }
+        self.baseline.validate()?;
         if let Some(e) = self.solver.element_size {
             if !(e > 0.0 && e.is_finite()) {
                 return bad(format!("element size must be positive and finite, got {e}"));

@@ -75,7 +75,7 @@ impl Prepared {
             }
             Ok(())
         };
-        let system = System::build_with(scene, &settings, &budget);
+        let system = System::build_linked(scene, &settings, &budget, options.method.uses_links());
         progress.end();
         let system = system?;
         let surfaces = Surfaces::new(scene, &system);

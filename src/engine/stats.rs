@@ -60,6 +60,9 @@ pub struct RenderStats {
     pub fallbacks: Vec<String>,
     /// Things the user should know about the result (e.g. the iteration cap was reached).
     pub warnings: Vec<String>,
+    /// A baseline method's own figures: rays and time of its setup, its settings, the shots of
+    /// progressive refinement (`None` for antiradiance).
+    pub method_report: Option<crate::methods::MethodReport>,
 }
 
 /// A rendered frame.
@@ -100,6 +103,9 @@ pub struct Setup {
     pub uploads_ms: f64,
     /// Creating the GPU pipelines (from the pipeline cache when it holds them).
     pub pipelines_ms: f64,
+    /// A baseline method's own preparation (hierarchical radiosity's visibility rays,
+    /// progressive refinement's environment rays).
+    pub method_ms: f64,
     /// The rest of the backend's creation (layouts, descriptor sets, the float16 probe; the
     /// CPU backend's ray caster).
     pub other_ms: f64,
@@ -110,6 +116,6 @@ pub struct Setup {
 impl Setup {
     /// Everything but linking.
     pub fn after_linking_ms(&self) -> f64 {
-        self.uploads_ms + self.pipelines_ms + self.other_ms + self.lights_ms
+        self.uploads_ms + self.pipelines_ms + self.method_ms + self.other_ms + self.lights_ms
     }
 }

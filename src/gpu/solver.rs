@@ -592,6 +592,16 @@ impl GpuSolver {
         Ok(self.unscale(self.res.layout().to_table(&t)))
     }
 
+    /// Replaces I_total with `table` (unscaled): a method that computes its display table
+    /// itself (progressive refinement) draws it with the same frame.
+    pub fn upload_i_total(&mut self, table: &Table) -> Result<()> {
+        let l = *self.res.layout();
+        let mut scaled = table.clone();
+        scaled.data.iter_mut().for_each(|v| *v *= self.scale);
+        let bytes = encode(self.res.plan.format, &l.from_table(&scaled));
+        self.res.images.i_total.upload(&bytes)
+    }
+
     /// Reads the pushed incident radiance back (push leaves odd depths' rows in the L_in image).
     pub fn read_l_push(&mut self) -> Result<Table> {
         let layout = *self.res.layout();

@@ -1,9 +1,11 @@
 //! `study`: error against run time. Renders a scene over a sweep of antiradiance settings
 //! (iterations 1..N for each of: bins, element sizes, the other scheme, the other precision,
-//! each varied alone around the scene's own settings) and the path tracer at increasing sample
-//! counts, measures wall time (linking apart from the per-frame solve) and the error against a
-//! reference, for the full image and for indirect light alone, and writes `study.csv`,
-//! `error-vs-time.png` and `convergence.png`.
+//! each varied alone around the scene's own settings), the baselines as families of their own
+//! (hierarchical radiosity with explicit visibility per rays-per-link setting, progressive
+//! refinement per subdivision setting, iterations 1..N each, at the scene's settings) and the
+//! path tracer at increasing sample counts, measures wall time (linking apart from the per-frame
+//! solve) and the error against a reference, for the full image and for indirect light alone,
+//! and writes `study.csv`, `error-vs-time.png` and `convergence.png`.
 
 pub mod plot;
 
@@ -14,7 +16,7 @@ use crate::metrics::{compare, subtract, Metrics};
 use crate::progress::Progress;
 use crate::reference::{render_reference, ReferenceOptions};
 use crate::scene::{Precision, Scene, Scheme};
-use crate::settings::BackendKind;
+use crate::settings::{BackendKind, Method};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -41,6 +43,12 @@ pub struct StudyOptions {
     /// Backend, device and any fixed overrides for antiradiance (each run varies one setting
     /// on top of these).
     pub render: Options,
+    /// Methods measured (antiradiance's families, and each baseline's).
+    pub methods: Vec<Method>,
+    /// Visibility rays per link of the hierarchical-radiosity runs, one run each.
+    pub rays_per_link: Vec<u32>,
+    /// Receiver subdivision levels of the progressive-refinement runs, one run each.
+    pub subdivisions: Vec<u32>,
 }
 
 impl StudyOptions {
@@ -57,6 +65,9 @@ impl StudyOptions {
             spp: vec![1, 4, 16, 64, 256],
             seed: 0x5eed_57d1,
             render: Options::default(),
+            methods: Method::ALL.to_vec(),
+            rays_per_link: vec![4, 16, crate::methods::DEFAULT_RAYS_PER_LINK, 141],
+            subdivisions: vec![0, crate::methods::DEFAULT_SUBDIVISION],
         }
     }
 }
@@ -64,10 +75,11 @@ impl StudyOptions {
 /// One row of `study.csv`.
 #[derive(Debug, Clone)]
 pub struct Row {
-    /// `antiradiance` or `pathtracer`.
+    /// `antiradiance`, `hierarchical-radiosity`, `progressive-radiosity` or `pathtracer`.
     pub method: &'static str,
     /// The parameter varied in this run's family: `base`, `bins`, `element_size`, `scheme`,
-    /// `precision`, or `spp`.
+    /// `precision` (antiradiance), `rays_per_link` (hierarchical radiosity), `subdivision`
+    /// (progressive refinement), or `spp`.
     pub family: String,
     /// Label of the run's curve in the plots.
     pub label: String,
@@ -103,6 +115,12 @@ pub struct Row {
     pub indirect: Option<Metrics>,
     /// Fallbacks the run took.
     pub fallbacks: Vec<String>,
+    /// Visibility rays per link (hierarchical radiosity).
+    pub rays_per_link: Option<u32>,
+    /// Deepest receiver subdivision (progressive refinement).
+    pub subdivision: Option<u32>,
+    /// Shots up to this image (progressive refinement).
+    pub shots: Option<usize>,
 }
 
 impl Row {
@@ -118,7 +136,7 @@ impl Row {
             .map(|m| format!("  indirect relRMSE {:.4}", m.rel_rmse))
             .unwrap_or_default();
         format!(
-            "{:<12} {:<36} {:>8} {:>9.0} ms  relRMSE {:.4}  MARE {:.4}  FLIP {:.4}{indirect}",
+            "{:<22} {:<44} {:>8} {:>9.0} ms  relRMSE {:.4}  MARE {:.4}  FLIP {:.4}{indirect}",
             self.method,
             self.label,
             step,
@@ -201,17 +219,48 @@ struct Config {
 
 fn configs(scene: &Scene, o: &StudyOptions) -> Result<Vec<Config>> {
     let base = o.render.resolve(scene)?.settings;
-    let mut out = vec![Config {
+    let mut out = Vec::new();
+    let with = |method: Method, f: &dyn Fn(&mut Options)| {
+        let mut options = o.render.clone();
+        options.method = method;
+        f(&mut options);
+        options
+    };
+    if o.methods.contains(&Method::HierarchicalRadiosity) {
+        for &n in &o.rays_per_link {
+            out.push(Config {
+                family: "rays_per_link",
+                label: format!("hierarchical radiosity, {n} rays/link"),
+                options: with(Method::HierarchicalRadiosity, &|r| {
+                    r.baseline.rays_per_link = n
+                }),
+            });
+        }
+    }
+    if o.methods.contains(&Method::ProgressiveRadiosity) {
+        for &l in &o.subdivisions {
+            out.push(Config {
+                family: "subdivision",
+                label: format!("progressive refinement, subdivision {l}"),
+                options: with(Method::ProgressiveRadiosity, &|r| {
+                    r.baseline.subdivision = l
+                }),
+            });
+        }
+    }
+    if !o.methods.contains(&Method::Antiradiance) {
+        return Ok(out);
+    }
+    out.push(Config {
         family: "base",
         label: format!(
             "base ({} bins, elem {}, {}, {})",
             base.bins, base.element_size, base.scheme, base.precision
         ),
-        options: o.render.clone(),
-    }];
+        options: with(Method::Antiradiance, &|_| {}),
+    });
     let mut vary = |family: &'static str, label: String, f: &dyn Fn(&mut Options)| {
-        let mut options = o.render.clone();
-        f(&mut options);
+        let options = with(Method::Antiradiance, f);
         if options.solver.apply(&base) != base {
             out.push(Config {
                 family,
@@ -291,15 +340,25 @@ pub fn run(
             ));
             Ok(())
         })?;
+        let method = c.options.method;
+        let report = stats.method_report.clone().unwrap_or_default();
+        let per_iteration = report.figures.get("shots_per_iteration").copied();
         for (k, setup_ms, ms, full, indirect) in frames {
             let row = Row {
-                method: "antiradiance",
+                method: method.as_str(),
                 family: c.family.into(),
                 label: c.label.clone(),
                 bins: Some(stats.bins),
                 element_size: Some(s.element_size),
-                scheme: Some(s.scheme),
-                precision: (o.render.backend == BackendKind::Gpu).then_some(s.precision),
+                // Progressive refinement has no scheme; a baseline reports its own precision.
+                scheme: (method != Method::ProgressiveRadiosity).then_some(s.scheme),
+                precision: (o.render.backend == BackendKind::Gpu).then_some(
+                    if method == Method::Antiradiance {
+                        s.precision
+                    } else {
+                        stats.precision
+                    },
+                ),
                 iterations: Some(k),
                 spp: None,
                 elements: Some(stats.elements),
@@ -313,6 +372,11 @@ pub fn run(
                 full,
                 indirect,
                 fallbacks: stats.fallbacks.clone(),
+                rays_per_link: (method == Method::HierarchicalRadiosity)
+                    .then_some(c.options.baseline.rays_per_link),
+                subdivision: (method == Method::ProgressiveRadiosity)
+                    .then_some(c.options.baseline.subdivision),
+                shots: per_iteration.map(|n| (k * n as usize).min(report.shots.len())),
             };
             log(&row);
             rows.push(row);
@@ -351,6 +415,9 @@ pub fn run(
             full,
             indirect,
             fallbacks: Vec::new(),
+            rays_per_link: None,
+            subdivision: None,
+            shots: None,
         };
         log(&row);
         rows.push(row);
@@ -361,7 +428,7 @@ pub fn run(
 /// The CSV header of [`csv`].
 pub const CSV_HEADER: &str = "method,family,bins,element_size,scheme,precision,iterations,spp,\
 elements,links,linking_ms,setup_ms,frame_ms,total_ms,residual,rel_rmse,mare,flip,indirect_rel_rmse,\
-indirect_mare,indirect_flip,fallbacks";
+indirect_mare,indirect_flip,fallbacks,rays_per_link,subdivision,shots";
 
 /// `study.csv`: one row per run, empty fields where a column does not apply.
 pub fn csv(rows: &[Row]) -> String {
@@ -374,7 +441,7 @@ pub fn csv(rows: &[Row]) -> String {
         let ind = |f: fn(&Metrics) -> f64| opt(r.indirect.as_ref().map(f));
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3},{},{:.6e},{:.6e},{:.6e},{},{},{},\"{}\"",
+            "{},{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3},{},{:.6e},{:.6e},{:.6e},{},{},{},\"{}\",{},{},{}",
             r.method,
             r.family,
             opt(r.bins),
@@ -396,7 +463,10 @@ pub fn csv(rows: &[Row]) -> String {
             ind(|m| m.rel_rmse),
             ind(|m| m.mare),
             ind(|m| m.flip),
-            r.fallbacks.join("; ").replace('"', "'"),
+            r.fallbacks.join("; ").replace('"', "'").replace(',', ";"),
+            opt(r.rays_per_link),
+            opt(r.subdivision),
+            opt(r.shots),
         );
     }
     s

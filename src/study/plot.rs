@@ -1,7 +1,9 @@
 //! The study's figures (plotters, bitmap backend, the bundled DejaVu Sans font):
-//! `error-vs-time.png` (log-log error against time to the image, a curve per antiradiance run
-//! family and the path tracer, the equal-time crossover marked; full image and indirect light)
-//! and `convergence.png` (residual and error per iteration, both schemes).
+//! `error-vs-time.png` (log-log error against time to the image, a curve per run: antiradiance
+//! solid with circles, hierarchical radiosity dashed with triangles, progressive refinement
+//! short-dashed with crosses, the path tracer thick black; each method's equal-time comparison
+//! with the path tracer stated, antiradiance's crossover marked; full image and indirect light)
+//! and `convergence.png` (residual and error per iteration).
 
 use super::Row;
 use crate::error::{Error, Result};
@@ -38,11 +40,11 @@ fn interp(pts: &[(f64, f64)], x: f64) -> Option<f64> {
     })
 }
 
-/// The best error antiradiance reached at or before each time (its Pareto frontier).
-fn frontier(rows: &[&Row], err: impl Fn(&Row) -> Option<f64>) -> Vec<(f64, f64)> {
+/// The best error `method` reached at or before each time (its Pareto frontier).
+fn frontier(rows: &[&Row], method: &str, err: impl Fn(&Row) -> Option<f64>) -> Vec<(f64, f64)> {
     let mut pts: Vec<(f64, f64)> = rows
         .iter()
-        .filter(|r| r.method == "antiradiance")
+        .filter(|r| r.method == method)
         .filter_map(|r| err(r).map(|e| (r.total_ms(), e)))
         .filter(|p| p.0 > 0.0 && p.1 > 0.0 && p.1.is_finite())
         .collect();
@@ -57,7 +59,8 @@ fn frontier(rows: &[&Row], err: impl Fn(&Row) -> Option<f64>) -> Vec<(f64, f64)>
         .collect()
 }
 
-/// How the path tracer and antiradiance compare at equal time.
+/// How the path tracer and antiradiance (or another method, [`crossover_for`]) compare at equal
+/// time; the variants name antiradiance, [`Crossover::phrase`] any method.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Crossover {
     /// Antiradiance is more accurate before this time (ms), the path tracer from then on.
@@ -85,12 +88,40 @@ impl std::fmt::Display for Crossover {
     }
 }
 
+impl Crossover {
+    /// The comparison in words for `method` (e.g. `hierarchical-radiosity`).
+    pub fn phrase(&self, method: &str) -> String {
+        match self {
+            Crossover::At(ms) => format!(
+                "{method} ahead until {:.3} s, the path tracer after",
+                ms / 1e3
+            ),
+            Crossover::PathTracerAhead => {
+                format!("path tracer ahead of {method} at every shared time")
+            }
+            Crossover::AntiradianceAhead => {
+                format!("{method} ahead of the path tracer at every shared time")
+            }
+            Crossover::NoOverlap => format!("{method}: no overlap with the path tracer's times"),
+        }
+    }
+}
+
 /// The equal-time comparison: over the times both methods were measured, where the path
 /// tracer's error (log-log interpolation between its runs) drops to the best error antiradiance
 /// reached by then (its Pareto frontier).
 pub fn crossover(rows: &[Row], err: impl Fn(&Row) -> Option<f64> + Copy) -> Crossover {
+    crossover_for(rows, "antiradiance", err)
+}
+
+/// [`crossover`] for `method`'s runs (a [`Row::method`] spelling).
+pub fn crossover_for(
+    rows: &[Row],
+    method: &str,
+    err: impl Fn(&Row) -> Option<f64> + Copy,
+) -> Crossover {
     let all: Vec<&Row> = rows.iter().collect();
-    let front = frontier(&all, err);
+    let front = frontier(&all, method, err);
     let mut pt: Vec<(f64, f64)> = rows
         .iter()
         .filter(|r| r.method == "pathtracer")
@@ -154,6 +185,67 @@ fn tick(v: &f64) -> String {
 
 type Panel<'a> = (&'a str, &'a dyn Fn(&Row) -> Option<f64>);
 
+/// How a method's curves are drawn: dash length and gap (0: solid), and the point marker.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Style {
+    Solid,
+    Dashed,
+    Dotted,
+}
+
+fn style_of(method: &str) -> Style {
+    match method {
+        "hierarchical-radiosity" => Style::Dashed,
+        "progressive-radiosity" => Style::Dotted,
+        _ => Style::Solid,
+    }
+}
+
+/// Draws one curve of `style` with its legend entry and markers.
+fn draw_curve<DB: DrawingBackend, X, Y>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<X, Y>>,
+    pts: Vec<(f64, f64)>,
+    label: &str,
+    style: Style,
+    line: ShapeStyle,
+    path: &Path,
+) -> Result<()>
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    let dash = match style {
+        Style::Solid => None,
+        Style::Dashed => Some((10, 6)),
+        Style::Dotted => Some((3, 4)),
+    };
+    let anno = match dash {
+        None => chart
+            .draw_series(LineSeries::new(pts.clone(), line))
+            .map_err(|e| err(path, e))?,
+        Some((d, g)) => chart
+            .draw_series(DashedLineSeries::new(pts.clone(), d, g, line))
+            .map_err(|e| err(path, e))?,
+    };
+    anno.label(label.to_string()).legend(move |(x, y)| {
+        let (d, g) = dash.unwrap_or((18, 0));
+        plotters::element::DashedPathElement::new(vec![(x, y), (x + 18, y)], d, g, line)
+    });
+    let color = line.color;
+    match style {
+        Style::Solid => chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled()))),
+        Style::Dashed => chart.draw_series(
+            pts.iter()
+                .map(|&p| TriangleMarker::new(p, 4, color.filled())),
+        ),
+        Style::Dotted => {
+            chart.draw_series(pts.iter().map(|&p| Cross::new(p, 4, color.stroke_width(2))))
+        }
+    }
+    .map_err(|e| err(path, e))?;
+    Ok(())
+}
+
 /// One color per curve label, the same in every panel and plot.
 fn color_of(rows: &[Row], label: &str) -> RGBAColor {
     let i = series_of(rows)
@@ -209,21 +301,14 @@ pub fn error_vs_time(rows: &[Row], path: &Path) -> Result<Crossover> {
         for (label, rs) in series.iter() {
             let is_pt = rs[0].method == "pathtracer";
             let color = color_of(rows, label);
-            let style = color.stroke_width(if is_pt { 3 } else { 2 });
+            let line = color.stroke_width(if is_pt { 3 } else { 2 });
             let mut pts: Vec<(f64, f64)> = rs
                 .iter()
                 .filter_map(|r| f(r).map(|e| (r.total_ms() / 1e3, e)))
                 .filter(|p| p.1 > 0.0 && p.1.is_finite())
                 .collect();
             pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-            chart
-                .draw_series(LineSeries::new(pts.clone(), style))
-                .map_err(|e| err(path, e))?
-                .label(label.clone())
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], style));
-            chart
-                .draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))
-                .map_err(|e| err(path, e))?;
+            draw_curve(&mut chart, pts, label, style_of(rs[0].method), line, path)?;
         }
         let cross = crossover(rows, *f);
         if *title == "full image" {
@@ -235,14 +320,26 @@ pub fn error_vs_time(rows: &[Row], path: &Path) -> Result<Crossover> {
                 .draw_series(LineSeries::new(vec![(s, y0), (s, y1)], RED.stroke_width(1)))
                 .map_err(|e| err(path, e))?;
         }
-        let note = cross.to_string();
-        chart
-            .draw_series(std::iter::once(Text::new(
-                note,
-                (x0 * (x1 / x0).powf(0.45), y1 / 1.25),
-                ("sans-serif", 16).into_font().color(&RED),
-            )))
-            .map_err(|e| err(path, e))?;
+        // One line per method measured: its equal-time comparison with the path tracer.
+        let methods: Vec<&str> = crate::settings::Method::ALL
+            .iter()
+            .map(|m| m.as_str())
+            .filter(|m| rows.iter().any(|r| r.method == *m))
+            .collect();
+        for (i, m) in methods.iter().enumerate() {
+            let note = if *m == "antiradiance" && methods.len() == 1 {
+                cross.to_string()
+            } else {
+                crossover_for(rows, m, *f).phrase(m)
+            };
+            chart
+                .draw_series(std::iter::once(Text::new(
+                    note,
+                    (x0 * (x1 / x0).powf(0.3), y1 / 1.25f64.powi(1 + i as i32)),
+                    ("sans-serif", 15).into_font().color(&RED),
+                )))
+                .map_err(|e| err(path, e))?;
+        }
         chart
             .configure_series_labels()
             .background_style(WHITE.mix(0.85))
@@ -265,7 +362,7 @@ pub fn convergence(rows: &[Row], path: &Path) -> Result<()> {
     let areas = root.split_evenly((1, 2));
     let ar: Vec<Row> = rows
         .iter()
-        .filter(|r| r.method == "antiradiance")
+        .filter(|r| r.method != "pathtracer")
         .cloned()
         .collect();
     let kmax = ar
@@ -276,8 +373,8 @@ pub fn convergence(rows: &[Row], path: &Path) -> Result<()> {
         .max(2) as f64;
     let panels: [(&str, &str, &dyn Fn(&Row) -> Option<f64>, bool); 2] = [
         (
-            "residual per iteration (scene settings, both schemes)",
-            "relative change of I_ex",
+            "residual per iteration (scene settings, both schemes; baselines)",
+            "change of I_ex (progressive refinement: unshot power), relative",
             &|r: &Row| r.residual,
             true,
         ),
@@ -289,7 +386,12 @@ pub fn convergence(rows: &[Row], path: &Path) -> Result<()> {
         ),
     ];
     for (area, (title, ydesc, f, schemes_only)) in areas.iter().zip(panels) {
-        let keep = |r: &&Row| !schemes_only || r.family == "base" || r.family == "scheme";
+        let keep = |r: &&Row| {
+            !schemes_only
+                || r.method != "antiradiance"
+                || r.family == "base"
+                || r.family == "scheme"
+        };
         let (y0, y1) = log_range(ar.iter().filter(keep).filter_map(f));
         let mut chart = ChartBuilder::on(area)
             .caption(title, ("sans-serif", 22))
@@ -315,13 +417,8 @@ pub fn convergence(rows: &[Row], path: &Path) -> Result<()> {
                 .filter_map(|r| Some((r.iterations? as f64, f(r)?)))
                 .filter(|p| p.1 > 0.0 && p.1.is_finite())
                 .collect();
-            chart
-                .draw_series(LineSeries::new(pts, color.stroke_width(2)))
-                .map_err(|e| err(path, e))?
-                .label(label)
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
-                });
+            let style = style_of(rs[0].method);
+            draw_curve(&mut chart, pts, &label, style, color.stroke_width(2), path)?;
         }
         chart
             .configure_series_labels()
@@ -373,6 +470,9 @@ mod tests {
             full: m,
             indirect: None,
             fallbacks: Vec::new(),
+            rays_per_link: None,
+            subdivision: None,
+            shots: None,
         }
     }
 
