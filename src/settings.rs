@@ -154,6 +154,13 @@ impl Method {
     pub fn uses_links(self) -> bool {
         self != Method::ProgressiveRadiosity
     }
+
+    /// Whether area emitters' direct light may come from shadow-mapped samples (§3.3).
+    /// Progressive refinement shoots its emitters instead: that is the method's own way, and
+    /// drawing samples per pixel as well would count their light twice.
+    pub fn samples_emitters(self) -> bool {
+        self != Method::ProgressiveRadiosity
+    }
 }
 
 #[cfg(test)]

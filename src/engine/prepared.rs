@@ -81,7 +81,14 @@ impl Prepared {
         let surfaces = Surfaces::new(scene, &system);
         // The analytic lights, then the area emitters' samples (§3.3).
         let mut lights = scene.lights.clone();
-        let emitter_choice = emitters::choose(scene, settings.emitter_samples);
+        let emitter_choice = if options.method.samples_emitters() {
+            emitters::choose(scene, settings.emitter_samples)
+        } else {
+            emitters::Choice {
+                samples: 0,
+                reason: format!("{}: area emitters shoot (no samples)", options.method),
+            }
+        };
         lights.extend(emitters::sample(scene, emitter_choice.samples));
         let mut plan = Plan::new(
             scene,
@@ -91,7 +98,10 @@ impl Prepared {
             settings.precision,
             options.all_passes,
         );
-        if emitter_choice.samples > 0 || settings.emitter_samples.is_some() {
+        if emitter_choice.samples > 0
+            || settings.emitter_samples.is_some()
+            || !options.method.samples_emitters()
+        {
             plan.decisions.push(emitter_choice.reason);
         }
         let mut fallbacks = Vec::new();

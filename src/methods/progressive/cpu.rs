@@ -226,6 +226,7 @@ impl Backend for CpuShooting {
         let table = self.shape.display(&self.els, &self.state.gathered);
         let image = cpu::render(
             &prep.scene,
+            &prep.lights,
             &prep.camera,
             &prep.system,
             &table,

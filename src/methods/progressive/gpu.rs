@@ -92,6 +92,7 @@ impl GpuShooting {
         let frame = GpuFrame::new(
             ctx.clone(),
             &prep.scene,
+            &prep.lights,
             &prep.camera,
             sys,
             &prep.surfaces,
