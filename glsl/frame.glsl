@@ -135,7 +135,9 @@ float ar_visibility(Light l, vec3 p, vec3 n, float cosv) {
     ivec2 base = ivec2(v.atlas.xy);
     bool ortho = v.origin.w > 0.5;
     float texel = 2.0 * v.forward.w * (ortho ? 1.0 : length(p - v.origin.xyz)) / float(s);
-    vec3 q = p + n * (AR_SHADOW_NORMAL_OFFSET * texel);
+    // Offset toward the light, not along n (shadow.rs NORMAL_OFFSET: no lift over edges).
+    vec3 toward = ortho ? -v.forward.xyz : normalize(v.origin.xyz - p);
+    vec3 q = p + toward * (AR_SHADOW_NORMAL_OFFSET * texel);
     vec4 c = v.view_proj * vec4(q, 1.0);
     float tx = (c.x / c.w + 1.0) * 0.5 * float(s) - 0.5;
     float ty = (c.y / c.w + 1.0) * 0.5 * float(s) - 0.5;

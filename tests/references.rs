@@ -39,7 +39,12 @@ struct Bounds {
 /// Renders `scene` on both backends at its own settings, measures each image against `truth`
 /// and asserts `bounds`; then checks that the bounds discriminate: the CPU solve without
 /// antiradiance (U alone, light through every occluder) must break one of them.
-fn check(name: &str, scene: &Scene, truth: &Truth, bounds: &Bounds) {
+fn check(
+    name: &str,
+    scene: &Scene,
+    truth: &Truth,
+    bounds: &Bounds,
+) -> Vec<antiradiance::engine::Rendered> {
     let within = |m: &Measured| {
         m.rel_rmse < bounds.rel_rmse
             && m.mean_bias.abs() < bounds.mean_bias
@@ -101,6 +106,7 @@ fn check(name: &str, scene: &Scene, truth: &Truth, bounds: &Bounds) {
         !within(&m),
         "{name}: the bounds do not tell U alone from the solution"
     );
+    renders
 }
 
 /// A block resting on a floor in front of a back wall, under a square area emitter.
@@ -323,5 +329,76 @@ fn cornell_box_at_low_resolution() {
         gpu_vs_cpu: 7e-2,
         gpu_vs_cpu_f16: 9e-2,
     };
-    check("cornell box", &s, &truth, &bounds);
+    let renders = check("cornell box", &s, &truth, &bounds);
+    // The floor beside the short block (between it and the right wall), where its shadow and
+    // the red wall's bleeding meet: the pixels whose center ray reaches the floor at
+    // x ∈ [0.74, 0.95], z ∈ [0.2, 0.95] (9 pixels at 32×32, none of them seeing the block).
+    let view = antiradiance::frame::camera::View::new(&s.camera);
+    let region: Vec<usize> = (0..s.camera.height)
+        .flat_map(|y| (0..s.camera.width).map(move |x| (x, y)))
+        .filter(|&(x, y)| {
+            let d = view.ray(x as f64 + 0.5, y as f64 + 0.5);
+            let p = view.eye + d * (-view.eye.y / d.y);
+            d.y < 0.0 && (0.74..0.95).contains(&p.x) && (0.2..0.95).contains(&p.z)
+        })
+        .map(|(x, y)| (y * s.camera.width + x) as usize)
+        .collect();
+    assert!(region.len() >= 4, "{} floor pixels", region.len());
+    let mean = |img: &antiradiance::frame::Image| {
+        region
+            .iter()
+            .map(|&i| antiradiance::metrics::luminance(img.pixels[i]) as f64)
+            .sum::<f64>()
+            / region.len() as f64
+    };
+    let want = mean(&truth.reference.image);
+    for r in &renders {
+        let got = mean(&r.image);
+        println!(
+            "cornell box {}: floor beside the short block ({} pixels) {:+.2}% off the reference",
+            r.stats.backend,
+            region.len(),
+            100.0 * (got / want - 1.0)
+        );
+        assert!((got / want - 1.0).abs() < 0.1, "{} vs {want}", got);
+    }
+}
+
+/// The glossy variant of the bundled box at its own settings, 32×32 (the bound 0.20).
+#[test]
+fn glossy_cornell_box_at_low_resolution() {
+    let mut s =
+        load_scene(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box-glossy.toml"))
+            .unwrap();
+    s.camera.width = 32;
+    s.camera.height = 32;
+    let truth = path_traced(&s, 2048);
+    let bounds = Bounds {
+        rel_rmse: 0.20,
+        mean_bias: 0.05,
+        indirect_rmse: 0.5,
+        indirect_median: Some(0.3),
+        gpu_vs_cpu: 7e-2,
+        gpu_vs_cpu_f16: 9e-2,
+    };
+    check("glossy cornell box", &s, &truth, &bounds);
+}
+
+/// MNRoom at its own settings, 40×30 (the bound 0.15).
+#[test]
+fn mnroom_at_low_resolution() {
+    let mut s =
+        load_scene(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/mnroom.toml")).unwrap();
+    s.camera.width = 40;
+    s.camera.height = 30;
+    let truth = path_traced(&s, 2048);
+    let bounds = Bounds {
+        rel_rmse: 0.15,
+        mean_bias: 0.05,
+        indirect_rmse: 0.5,
+        indirect_median: Some(0.3),
+        gpu_vs_cpu: 7e-2,
+        gpu_vs_cpu_f16: 9e-2,
+    };
+    check("mnroom", &s, &truth, &bounds);
 }

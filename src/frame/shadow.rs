@@ -14,7 +14,11 @@ use rayon::prelude::*;
 
 /// Value of a texel that sees no surface.
 pub const EMPTY: f32 = 3.0e38;
-/// Receiver offset along its normal, in texels (at the receiver's distance).
+/// Receiver offset toward the light, in texels (at the receiver's distance). Toward the light,
+/// not along the normal: a normal offset lifts the receiver over an occluder's edge (measured:
+/// the Cornell box's floor beside the short block 21% too bright in direct light with 128²
+/// emitter-sample maps), while a move along the light's own ray keeps the lookup texel and only
+/// shortens the compared distance.
 pub const NORMAL_OFFSET: f64 = 1.5;
 /// Constant depth bias, in texels.
 pub const CONSTANT_BIAS: f64 = 1.0;
@@ -381,7 +385,7 @@ impl ShadowMaps {
 
     /// Filtered fraction of light `light` reaching `p`, a surface point with unit normal `n`
     /// facing the light, where `cos` is the cosine between `n` and the direction to the light.
-    pub fn visibility(&self, light: usize, p: DVec3, n: DVec3, cos: f64) -> f64 {
+    pub fn visibility(&self, light: usize, p: DVec3, _n: DVec3, cos: f64) -> f64 {
         if self.data.is_empty() {
             return 1.0;
         }
@@ -389,7 +393,12 @@ impl ShadowMaps {
         let view = &self.views[vi];
         let s = view.size as i64;
         let texel = view.texel_size(p, view.size);
-        let q = p + n * (NORMAL_OFFSET * texel);
+        let toward = if view.ortho {
+            -view.forward
+        } else {
+            (view.origin - p).normalize_or_zero()
+        };
+        let q = p + toward * (NORMAL_OFFSET * texel);
         let c = view.view_proj * q.extend(1.0);
         let (x, y) = (c.x / c.w, c.y / c.w);
         let tx = (x + 1.0) * 0.5 * s as f64 - 0.5;
