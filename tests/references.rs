@@ -308,8 +308,9 @@ fn open_topped_corridors_lit_only_after_reflection() {
 }
 
 /// The bundled default scene at its own settings (128 bins, elements 0.25, τ = 1, 8
-/// iterations), 32×32. Measured: relative RMSE 0.097 (CPU) / 0.098 (GPU), mean +0.1% / −0.0%,
-/// indirect light 0.111, the 214 indirect-only pixels 6.9% off at the median; GPU vs CPU
+/// iterations), 32×32. Measured: relative RMSE 0.091 (CPU) / 0.093 (GPU), mean +0.2% / +0.0%,
+/// indirect light 0.110, the 214 indirect-only pixels 5.7% off at the median, the floor beside
+/// the short block −2.3% (+10.0% with shadow lookups offset along the normal); GPU vs CPU
 /// 2.4e-2 (raster against ray cast at the blocks' edges). Without antiradiance: 0.291, mean
 /// +18%, indirect light 0.585, median 38%. (With the lamp's light through the bins and cluster
 /// links uncalibrated, before issue 17: 0.300, median 19.9%.) The reference at 2048 spp keeps
@@ -332,7 +333,8 @@ fn cornell_box_at_low_resolution() {
     let renders = check("cornell box", &s, &truth, &bounds);
     // The floor beside the short block (between it and the right wall), where its shadow and
     // the red wall's bleeding meet: the pixels whose center ray reaches the floor at
-    // x ∈ [0.74, 0.95], z ∈ [0.2, 0.95] (9 pixels at 32×32, none of them seeing the block).
+    // x ∈ [0.74, 0.95], z ∈ [0.2, 0.95] (9 pixels at 32×32, none of them seeing the block); the issue's
+    // bound, 10% of the reference there.
     let view = antiradiance::frame::camera::View::new(&s.camera);
     let region: Vec<usize> = (0..s.camera.height)
         .flat_map(|y| (0..s.camera.width).map(move |x| (x, y)))
@@ -364,7 +366,10 @@ fn cornell_box_at_low_resolution() {
     }
 }
 
-/// The glossy variant of the bundled box at its own settings, 32×32 (the issue's bound 0.20).
+/// The glossy variant of the bundled box at its own settings, 32×32 (the issue asks ≤ 0.20).
+/// Measured: relative RMSE 0.173 (CPU) / 0.159 (GPU), mean +0.46% / −0.09%, indirect light
+/// 0.120, the 142 indirect-only pixels 6.9% off at the median; GPU vs CPU 1.8e-2. Without
+/// antiradiance: 0.405, mean +26%.
 #[test]
 fn glossy_cornell_box_at_low_resolution() {
     let mut s =
@@ -374,17 +379,19 @@ fn glossy_cornell_box_at_low_resolution() {
     s.camera.height = 32;
     let truth = path_traced(&s, 2048);
     let bounds = Bounds {
-        rel_rmse: 0.20,
-        mean_bias: 0.05,
-        indirect_rmse: 0.5,
-        indirect_median: Some(0.3),
-        gpu_vs_cpu: 7e-2,
+        rel_rmse: 0.19,
+        mean_bias: 0.01,
+        indirect_rmse: 0.14,
+        indirect_median: Some(0.09),
+        gpu_vs_cpu: 3e-2,
         gpu_vs_cpu_f16: 9e-2,
     };
     check("glossy cornell box", &s, &truth, &bounds);
 }
 
-/// MNRoom at its own settings, 40×30 (the issue's bound 0.15).
+/// MNRoom at its own settings, 40×30 (the issue asks ≤ 0.15). Measured: relative RMSE 0.0905
+/// (CPU) / 0.0906 (GPU), mean −0.39%, indirect light 0.092, the 191 indirect-only pixels 4.8%
+/// off at the median; GPU vs CPU 1.2e-4. Without antiradiance: 0.288, mean +21%.
 #[test]
 fn mnroom_at_low_resolution() {
     let mut s =
@@ -393,11 +400,11 @@ fn mnroom_at_low_resolution() {
     s.camera.height = 30;
     let truth = path_traced(&s, 2048);
     let bounds = Bounds {
-        rel_rmse: 0.15,
-        mean_bias: 0.05,
-        indirect_rmse: 0.5,
-        indirect_median: Some(0.3),
-        gpu_vs_cpu: 7e-2,
+        rel_rmse: 0.10,
+        mean_bias: 0.01,
+        indirect_rmse: 0.11,
+        indirect_median: Some(0.06),
+        gpu_vs_cpu: 4e-4,
         gpu_vs_cpu_f16: 9e-2,
     };
     check("mnroom", &s, &truth, &bounds);
