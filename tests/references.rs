@@ -248,8 +248,8 @@ fn corridors() -> Scene {
 // RMSE (the image less its direct-only render against the reference less its direct part) is
 // what tells antiradiance from U alone; it is bounded 1.5× too.
 
-/// Measured: relative RMSE 0.079 (CPU and GPU), mean −1.2%, indirect light 0.172; GPU vs CPU
-/// 4.3e-5. Without antiradiance: 0.082, mean +0.4%, indirect light 0.292. (With the emitter's
+/// Measured: relative RMSE 0.079 (CPU and GPU), mean −1.5%, indirect light 0.170; GPU vs CPU
+/// 9.4e-5. Without antiradiance: 0.082, mean +0.4%, indirect light 0.292. (With the emitter's
 /// light through the bins, before issue 17: 0.245, mean −1.3%.)
 #[test]
 fn block_on_a_floor_under_an_emitter() {
@@ -266,9 +266,9 @@ fn block_on_a_floor_under_an_emitter() {
     check("block on a floor", &s, &truth, &bounds);
 }
 
-/// Measured: relative RMSE 0.206, mean −1.4%, indirect light 0.295, and the floor under the
-/// slabs (121 pixels reached only by indirect light) 13.8% off at the median; GPU vs CPU
-/// 4.5e-5. Without antiradiance: 0.212, mean +0.4%, indirect light 0.673, median 62%. (With
+/// Measured: relative RMSE 0.200, mean +1.0%, indirect light 0.253, and the floor under the
+/// slabs (121 pixels reached only by indirect light) 10.9% off at the median; GPU vs CPU
+/// 4.3e-5. Without antiradiance: 0.212, mean +0.4%, indirect light 0.673, median 62%. (With
 /// the emitter's light through the bins, before issue 17: 0.722, median 418%: the stacked
 /// occluders leaked the direct light, a leak that shrank with the bins and τ, so the directional
 /// discretization of the cancellation.)
@@ -287,7 +287,7 @@ fn black_and_grey_slabs_between_an_emitter_and_a_floor() {
     check("slabs", &s, &truth, &bounds);
 }
 
-/// Measured: relative RMSE 0.315, mean −0.3%, indirect light 0.299, the corridor floors (215
+/// Measured: relative RMSE 0.318, mean −0.1%, indirect light 0.299, the corridor floors (215
 /// pixels reached only by indirect light) 11.1% off at the median, 46% at the 90th percentile.
 /// No setting moved the relative RMSE (0.314–0.319 for 128/256 bins, τ 1/0.25, elements ×1/×½,
 /// 8/24 iterations, before cluster links were calibrated). GPU vs CPU 9.2e-4. Without
