@@ -78,6 +78,7 @@ const float AR_PI = 3.14159265358979;
 #define AR_FRAME_GBUF_POSITION 9
 #define AR_FRAME_GBUF_VERTEX 10
 #define AR_FRAME_SPLAT 11
+#define AR_FRAME_EMITTERS 12
 
 layout(push_constant) uniform FrameConstants {
     mat4 view_proj;   // camera, or the shadow view being drawn
@@ -100,6 +101,13 @@ struct Light {
     vec4 direction;    // travel direction / spot axis / emitter normal
     vec4 power;        // rgb irradiance, intensity or radiance; w spot cut-off (radians)
     vec4 params;       // x spot beam width (radians) or emitter sample area
+};
+
+struct EmitterTriangle {
+    vec4 c0;
+    vec4 c1;
+    vec4 c2;
+    vec4 ke;
 };
 
 struct FrameElement {

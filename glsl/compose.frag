@@ -1,22 +1,106 @@
 #version 450
 // Final pixel (src/gpu/passes/compose.rs): per sample, emission + per-pixel direct light with
 // the shadow maps + indirect (vertex-interpolated, or the normalized splat sum); environment
-// where nothing was hit; back faces are black (one-sided surfaces). Averages the 2x2 samples.
+// where nothing was hit; back faces are black (one-sided surfaces). Averages the 2x2 samples;
+// a pixel at an emitter's edge takes its emission from sub-pixel rays (src/frame/edges.rs).
 #extension GL_GOOGLE_include_directive : require
 #include "frame.glsl"
 
 layout(location = 0) out vec4 color;
 
+// edges.rs DENSE_SAMPLES, SPARSE_SAMPLES, MAX_DENSE_TRIANGLES, OCCLUDER_MARGIN.
+const uint AR_EDGE_DENSE_SAMPLES = 32u;
+const uint AR_EDGE_SPARSE_SAMPLES = 8u;
+const uint AR_EDGE_MAX_DENSE_TRIANGLES = 64u;
+const float AR_EDGE_OCCLUDER_MARGIN = 0.01;
+
+// edges.rs SampleHit: 0 background, 1 emitter (either side), 2 another surface at `dist`.
+uint sample_hit(ivec2 t, out float dist) {
+    vec4 g = texelFetch(gbuf_position, t, 0);
+    dist = 0.0;
+    if (g.w < 0.5) {
+        return 0u;
+    }
+    FrameElement e = elements[uint(g.w + 0.5) - 1u];
+    vec3 ke = materials[e.ids.w].ke.rgb;
+    if (max(max(ke.r, ke.g), ke.b) > 0.0) {
+        return 1u;
+    }
+    dist = length(g.xyz - pc.eye.xyz);
+    return 2u;
+}
+
+// edges.rs EmitterTriangles::edge_emission.
+vec3 edge_emission(ivec2 px, int ss) {
+    uint count = uint(emitter_tris.length());
+    uint e = count <= AR_EDGE_MAX_DENSE_TRIANGLES ? AR_EDGE_DENSE_SAMPLES : AR_EDGE_SPARSE_SAMPLES;
+    uint kind[4];
+    float dist[4];
+    for (int q = 0; q < 4; q++) {
+        kind[q] = sample_hit(px * ss + ivec2(q % 2, q / 2), dist[q]);
+    }
+    // Camera rays through framebuffer positions: unproject onto the far plane (reversed depth 0),
+    // far from the eye so the subtraction keeps float precision.
+    mat4 inv = inverse(pc.view_proj);
+    vec2 size = vec2(pc.sizes.xy);  // the output's size (compose.rs)
+    vec3 eye = pc.eye.xyz;
+    vec3 sum = vec3(0.0);
+    for (uint j = 0u; j < e; j++) {
+        for (uint i = 0u; i < e; i++) {
+            vec2 fb = vec2(px) + (vec2(i, j) + 0.5) / float(e);
+            vec4 w = inv * vec4(fb / size * 2.0 - 1.0, 0.0, 1.0);
+            vec3 d = normalize(w.xyz / w.w - eye);
+            float best = 3.0e38;
+            bool front = false;
+            vec3 ke = vec3(0.0);
+            for (uint k = 0u; k < count; k++) {
+                EmitterTriangle tri = emitter_tris[k];
+                vec3 e1 = tri.c1.xyz - tri.c0.xyz;
+                vec3 e2 = tri.c2.xyz - tri.c0.xyz;
+                vec3 p = cross(d, e2);
+                float det = dot(e1, p);
+                if (abs(det) < 1e-30) {
+                    continue;
+                }
+                float inv_det = 1.0 / det;
+                vec3 s = eye - tri.c0.xyz;
+                float u = dot(s, p) * inv_det;
+                if (u < 0.0 || u > 1.0) {
+                    continue;
+                }
+                vec3 q = cross(s, e1);
+                float v = dot(d, q) * inv_det;
+                if (v < 0.0 || u + v > 1.0) {
+                    continue;
+                }
+                float t = dot(e2, q) * inv_det;
+                if (t > 0.0 && t < best) {
+                    best = t;
+                    front = dot(cross(e1, e2), d) < 0.0;
+                    ke = tri.ke.rgb;
+                }
+            }
+            uint q = (2u * j / e) * 2u + 2u * i / e;
+            bool blocked = kind[q] == 2u && dist[q] < best * (1.0 - AR_EDGE_OCCLUDER_MARGIN);
+            if (best < 3.0e38 && front && !blocked) {
+                sum += ke;
+            }
+        }
+    }
+    return sum / float(e * e);
+}
+
 void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
     int ss = int(pc.misc.w);
-    vec3 sum = vec3(0.0);
+    vec3 rest = vec3(0.0);
+    vec3 emission = vec3(0.0);
     for (int sy = 0; sy < ss; sy++) {
         for (int sx = 0; sx < ss; sx++) {
             ivec2 t = px * ss + ivec2(sx, sy);
             vec4 g = texelFetch(gbuf_position, t, 0);
             if (g.w < 0.5) {
-                sum += pc.environment.rgb;
+                rest += pc.environment.rgb;
                 continue;
             }
             FrameElement e = elements[uint(g.w + 0.5) - 1u];
@@ -26,7 +110,7 @@ void main() {
                 continue;
             }
             Material m = materials[e.ids.w];
-            vec3 l = m.ke.rgb + ar_direct_radiance(g.xyz, n, m, wo);
+            vec3 l = ar_direct_radiance(g.xyz, n, m, wo);
             // Only the shading kinds the scene has are compiled in (AR_VERTEX, AR_SPLAT).
             if (e.ids.z == AR_MODE_VERTEX) {
                 if (AR_VERTEX) {
@@ -40,8 +124,28 @@ void main() {
             }
             // Discretization can leave a slightly negative indirect term (antiradiance
             // over-cancelling); radiance is never negative (as in frame/cpu.rs).
-            sum += max(l, vec3(0.0));
+            rest += max(l, vec3(0.0));
+            emission += m.ke.rgb;
         }
     }
-    color = vec4(sum / float(ss * ss), 1.0);
+    float n = float(ss * ss);
+    // An edge pixel: some 2x2 sample of it or of its 8 neighbours hits an emitter.
+    ivec2 size = ivec2(pc.sizes.xy);
+    bool edge = false;
+    for (int dy = -1; dy <= 1 && !edge; dy++) {
+        for (int dx = -1; dx <= 1 && !edge; dx++) {
+            ivec2 q = px + ivec2(dx, dy);
+            if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size))) {
+                continue;
+            }
+            for (int k = 0; k < ss * ss; k++) {
+                float unused;
+                if (sample_hit(q * ss + ivec2(k % ss, k / ss), unused) == 1u) {
+                    edge = true;
+                }
+            }
+        }
+    }
+    vec3 l = rest / n + (edge ? edge_emission(px, ss) : emission / n);
+    color = vec4(l, 1.0);
 }

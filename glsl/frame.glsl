@@ -19,6 +19,7 @@ layout(binding = AR_FRAME_SHADOW_MAP) uniform sampler2D shadow_map;
 layout(binding = AR_FRAME_GBUF_POSITION) uniform sampler2D gbuf_position;
 layout(binding = AR_FRAME_GBUF_VERTEX) uniform sampler2D gbuf_vertex;
 layout(binding = AR_FRAME_SPLAT) uniform sampler2D splat_sum;
+layout(std430, binding = AR_FRAME_EMITTERS) readonly buffer Emitters { EmitterTriangle emitter_tris[]; };
 
 const float AR_SHADOW_NORMAL_OFFSET = 1.5;
 const float AR_SHADOW_CONSTANT_BIAS = 1.0;

@@ -1,8 +1,10 @@
 //! The frame on the CPU: the same image formation as the GPU frame passes (`src/gpu/frame.rs`),
 //! by ray casting at the same 2×2 sample positions: emission, per-pixel direct light with the
-//! shadow maps, indirect light splatted or vertex-interpolated, environment where rays escape.
+//! shadow maps, indirect light splatted or vertex-interpolated, environment where rays escape;
+//! pixels at an emitter's edge take its emission from sub-pixel rays (`edges.rs`).
 
 use super::camera::{View, SUPERSAMPLE};
+use super::edges::{EmitterTriangles, SampleHit};
 use super::image::Image;
 use super::lights::direct_radiance;
 use super::shadow::ShadowMaps;
@@ -67,64 +69,104 @@ pub fn render(
     let verts = vertex_values(surf, sys, i_total, view.eye);
     let grid = SplatGrid::new(surf);
     let (w, h) = (view.width as usize, view.height as usize);
+    let ss = SUPERSAMPLE as usize;
+    let (sw, sh) = (w * ss, h * ss);
+    let emitters = EmitterTriangles::new(scene);
+    // Every 2×2 sample first: its radiance less emission, its emission, and what it hit (for the
+    // emitter edges, `edges.rs`).
+    let mut samples = vec![(DVec3::ZERO, DVec3::ZERO, SampleHit::Background); sw * sh];
+    samples
+        .par_chunks_mut(sw)
+        .enumerate()
+        .for_each(|(sy, row)| {
+            for (sx, out) in row.iter_mut().enumerate() {
+                let x = (sx as f64 + 0.5) / SUPERSAMPLE as f64;
+                let y = (sy as f64 + 0.5) / SUPERSAMPLE as f64;
+                let d = view.ray(x, y);
+                *out = match caster.closest(view.eye, d, 0.0, f64::INFINITY) {
+                    None => (scene.environment, DVec3::ZERO, SampleHit::Background),
+                    Some(hit) => {
+                        let li = hit.leaf as usize;
+                        let leaf = &sys.leaves[li];
+                        let c = caster.corners(hit.leaf);
+                        let p = c[0] * (1.0 - hit.u - hit.v) + c[1] * hit.u + c[2] * hit.v;
+                        let mat = &sys.materials[leaf.material as usize];
+                        let kind = if mat.ke.max_element() > 0.0 {
+                            SampleHit::Emitter
+                        } else {
+                            SampleHit::Surface((p - view.eye).length())
+                        };
+                        let wo = -d;
+                        if wo.dot(leaf.normal) <= 0.0 {
+                            (DVec3::ZERO, DVec3::ZERO, kind) // one-sided: the back is black
+                        } else {
+                            let mut l = direct_radiance(lights, maps, p, leaf.normal, mat, wo);
+                            if surf.mode[li] == MODE_VERTEX {
+                                let cv = surf.corner_vertex[li];
+                                l += verts[cv[0] as usize] * (1.0 - hit.u - hit.v)
+                                    + verts[cv[1] as usize] * hit.u
+                                    + verts[cv[2] as usize] * hit.v;
+                            } else {
+                                let s = surf.surface[li];
+                                let (mut acc, mut wsum) = (DVec3::ZERO, 0.0);
+                                grid.near(p, |e| {
+                                    let e = e as usize;
+                                    if surf.surface[e] == s {
+                                        let wt = splat_weight(
+                                            (p - surf.center[e]).length(),
+                                            surf.radius[e],
+                                        );
+                                        if wt > 0.0 {
+                                            acc += display_radiance(sys, i_total, e, wo) * wt;
+                                            wsum += wt;
+                                        }
+                                    }
+                                });
+                                if wsum > 0.0 {
+                                    l += acc / wsum;
+                                }
+                            }
+                            // Discretization can leave a slightly negative indirect term
+                            // (antiradiance over-cancelling); radiance is never negative.
+                            (l.max(DVec3::ZERO), mat.ke, kind)
+                        }
+                    }
+                };
+            }
+        });
+    let sample =
+        |px: usize, py: usize, i: usize, j: usize| &samples[(py * ss + j) * sw + px * ss + i];
+    let sees_emitter = |px: usize, py: usize| {
+        (py.saturating_sub(1)..(py + 2).min(h)).any(|y| {
+            (px.saturating_sub(1)..(px + 2).min(w)).any(|x| {
+                (0..ss).any(|j| (0..ss).any(|i| sample(x, y, i, j).2 == SampleHit::Emitter))
+            })
+        })
+    };
+    let n = (ss * ss) as f64;
     let mut pixels = vec![[0f32; 3]; w * h];
-    let n = (SUPERSAMPLE * SUPERSAMPLE) as f64;
     pixels.par_chunks_mut(w).enumerate().for_each(|(py, row)| {
         for (px, out) in row.iter_mut().enumerate() {
-            let mut sum = DVec3::ZERO;
-            for sy in 0..SUPERSAMPLE {
-                for sx in 0..SUPERSAMPLE {
-                    let x = px as f64 + (sx as f64 + 0.5) / SUPERSAMPLE as f64;
-                    let y = py as f64 + (sy as f64 + 0.5) / SUPERSAMPLE as f64;
-                    let d = view.ray(x, y);
-                    sum += match caster.closest(view.eye, d, 0.0, f64::INFINITY) {
-                        None => scene.environment,
-                        Some(hit) => {
-                            let li = hit.leaf as usize;
-                            let leaf = &sys.leaves[li];
-                            let c = caster.corners(hit.leaf);
-                            let p = c[0] * (1.0 - hit.u - hit.v) + c[1] * hit.u + c[2] * hit.v;
-                            let wo = -d;
-                            if wo.dot(leaf.normal) <= 0.0 {
-                                DVec3::ZERO // one-sided surfaces: the back is black
-                            } else {
-                                let mat = &sys.materials[leaf.material as usize];
-                                let mut l =
-                                    mat.ke + direct_radiance(lights, maps, p, leaf.normal, mat, wo);
-                                if surf.mode[li] == MODE_VERTEX {
-                                    let cv = surf.corner_vertex[li];
-                                    l += verts[cv[0] as usize] * (1.0 - hit.u - hit.v)
-                                        + verts[cv[1] as usize] * hit.u
-                                        + verts[cv[2] as usize] * hit.v;
-                                } else {
-                                    let s = surf.surface[li];
-                                    let (mut acc, mut wsum) = (DVec3::ZERO, 0.0);
-                                    grid.near(p, |e| {
-                                        let e = e as usize;
-                                        if surf.surface[e] == s {
-                                            let wt = splat_weight(
-                                                (p - surf.center[e]).length(),
-                                                surf.radius[e],
-                                            );
-                                            if wt > 0.0 {
-                                                acc += display_radiance(sys, i_total, e, wo) * wt;
-                                                wsum += wt;
-                                            }
-                                        }
-                                    });
-                                    if wsum > 0.0 {
-                                        l += acc / wsum;
-                                    }
-                                }
-                                // Discretization can leave a slightly negative indirect term
-                                // (antiradiance over-cancelling); radiance is never negative.
-                                l.max(DVec3::ZERO)
-                            }
-                        }
-                    };
+            let (mut rest, mut emission) = (DVec3::ZERO, DVec3::ZERO);
+            for j in 0..ss {
+                for i in 0..ss {
+                    let s = sample(px, py, i, j);
+                    rest += s.0;
+                    emission += s.1;
                 }
             }
-            let v = sum / n;
+            let emission = if sees_emitter(px, py) {
+                emitters.edge_emission(
+                    view.eye,
+                    |x, y| view.ray(x, y),
+                    px as u32,
+                    py as u32,
+                    |i, j| sample(px, py, i, j).2,
+                )
+            } else {
+                emission / n
+            };
+            let v = rest / n + emission;
             *out = [v.x as f32, v.y as f32, v.z as f32];
         }
     });

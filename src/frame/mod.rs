@@ -4,6 +4,7 @@
 
 pub mod camera;
 pub mod cpu;
+pub mod edges;
 pub mod emitters;
 pub mod image;
 pub mod lights;

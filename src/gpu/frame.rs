@@ -19,6 +19,7 @@ use super::profiler::Profiler;
 use super::solver::GpuSolver;
 use crate::error::Result;
 use crate::frame::camera::{View, SUPERSAMPLE};
+use crate::frame::edges::EmitterTriangles;
 use crate::frame::shadow::ShadowMaps;
 use crate::frame::surfaces::Surfaces;
 use crate::frame::Image as Frame;
@@ -51,6 +52,7 @@ struct FrameData {
     adj_list: Vec<u32>,
     lights: Vec<super::layout::GpuLight>,
     shadow_views: Vec<super::layout::GpuShadowView>,
+    emitters: Vec<super::layout::GpuEmitterTriangle>,
 }
 
 impl FrameData {
@@ -79,6 +81,7 @@ impl FrameData {
             adj_list: pack::padded(adj_list),
             lights: pack::padded(pack::lights(lights, maps)),
             shadow_views: pack::padded(pack::shadow_views(maps)),
+            emitters: pack::padded(pack::emitter_triangles(&EmitterTriangles::new(scene))),
         }
     }
 
@@ -104,6 +107,7 @@ impl FrameData {
             adj_list: put("shared-vertex elements", as_bytes(&self.adj_list), sb)?,
             lights: put("lights", as_bytes(&self.lights), sb)?,
             shadow_views: put("shadow views", as_bytes(&self.shadow_views), sb)?,
+            emitters: put("emitting triangles", as_bytes(&self.emitters), sb)?,
         })
     }
 }
@@ -295,6 +299,7 @@ impl GpuFrame {
             (fb::ADJ_LIST, b.adj_list.raw),
             (fb::LIGHTS, b.lights.raw),
             (fb::SHADOW_VIEWS, b.shadow_views.raw),
+            (fb::EMITTERS, b.emitters.raw),
         ];
         pipelines::write_set(&self.ctx, self.set, self.sampler.raw(), &images, &buffers);
     }

@@ -257,6 +257,21 @@ pub struct GpuLight {
     pub params: [f32; 4],
 }
 
+/// An emitting triangle for the emitter edges of the compose pass (`EmitterTriangle` in
+/// common.glsl; [`crate::frame::edges::EmitterTriangles`]).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct GpuEmitterTriangle {
+    /// Corners (xyz), counter-clockwise from the emitting side.
+    pub c0: [f32; 4],
+    /// Second corner.
+    pub c1: [f32; 4],
+    /// Third corner.
+    pub c2: [f32; 4],
+    /// Emitted radiance (rgb).
+    pub ke: [f32; 4],
+}
+
 /// Per-leaf data of the frame passes (`FrameElement` in common.glsl), in leaf-slot order.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -309,10 +324,13 @@ pub mod frame_binding {
     pub const GBUF_VERTEX: u32 = 10;
     /// Splat accumulation: Σ w·L (rgb), Σ w (a).
     pub const SPLAT: u32 = 11;
+    /// Emitting triangles (storage).
+    pub const EMITTERS: u32 = 12;
     /// Number of bindings.
-    pub const COUNT: u32 = 12;
+    pub const COUNT: u32 = 13;
     /// Storage-buffer bindings (the rest are combined image samplers).
-    pub const BUFFERS: [u32; 7] = [
+    pub const BUFFERS: [u32; 8] = [
+        EMITTERS,
         MATERIALS,
         BIN_CENTERS,
         ELEMENTS,
@@ -464,6 +482,8 @@ mod tests {
             glsl_fields("Light"),
             ["kind_views", "position", "direction", "power", "params"]
         );
+        assert_eq!(size_of::<GpuEmitterTriangle>(), 64);
+        assert_eq!(glsl_fields("EmitterTriangle"), ["c0", "c1", "c2", "ke"]);
         assert_eq!(size_of::<GpuFrameElement>(), 64);
         assert_eq!(
             glsl_fields("FrameElement"),
@@ -484,6 +504,7 @@ mod tests {
             "GBUF_POSITION",
             "GBUF_VERTEX",
             "SPLAT",
+            "EMITTERS",
         ];
         assert_eq!(names.len() as u32, frame_binding::COUNT);
         for (value, name) in names.iter().enumerate() {

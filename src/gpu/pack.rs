@@ -234,6 +234,22 @@ pub fn glossy_terms(sys: &System, lobe_bins: &[u32]) -> u64 {
         .sum()
 }
 
+/// The emitting triangles as the compose pass reads them (`frame/edges.rs`).
+pub fn emitter_triangles(
+    t: &crate::frame::edges::EmitterTriangles,
+) -> Vec<super::layout::GpuEmitterTriangle> {
+    t.corners
+        .iter()
+        .zip(&t.ke)
+        .map(|(c, ke)| super::layout::GpuEmitterTriangle {
+            c0: v4(c[0], 0.0),
+            c1: v4(c[1], 0.0),
+            c2: v4(c[2], 0.0),
+            ke: v4(*ke, 0.0),
+        })
+        .collect()
+}
+
 /// Storage buffers may not be empty: one unused record pads an empty list.
 pub fn padded<T: Copy + Default>(v: Vec<T>) -> Vec<T> {
     if v.is_empty() {

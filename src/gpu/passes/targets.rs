@@ -80,5 +80,7 @@ resource_set! {
         pub lights,
         /// Shadow views.
         pub shadow_views,
+        /// Emitting triangles (emitter edges, `frame/edges.rs`).
+        pub emitters,
     }
 }
