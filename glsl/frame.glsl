@@ -124,10 +124,15 @@ bool ar_incident(Light l, vec3 p, out vec3 travel, out vec3 irradiance) {
 // shadow.rs ShadowMaps::visibility: tent-filtered percentage-closer lookup.
 float ar_visibility(Light l, vec3 p, vec3 n, float cosv) {
     // shadow.rs view_for: of a cube's faces, the one whose axis is nearest the direction.
+    // Loops here have constant trip counts, so the compiler unrolls them: llvmpipe caps the
+    // iterations of a loop per invocation (65535), which nested loops inside the loop over
+    // lights reached at ~900 lights (instant radiosity's VPLs), silently dropping light.
     uint vi = l.kind_views.y;
     vec3 dir = p - shadow_views[vi].origin.xyz;
-    for (uint i = l.kind_views.y + 1u; i < l.kind_views.y + l.kind_views.z; i++) {
-        if (dot(dir, shadow_views[i].forward.xyz) > dot(dir, shadow_views[vi].forward.xyz)) {
+    for (uint k = 1u; k < 6u; k++) {
+        uint i = l.kind_views.y + k;
+        if (k < l.kind_views.z
+            && dot(dir, shadow_views[i].forward.xyz) > dot(dir, shadow_views[vi].forward.xyz)) {
             vi = i;
         }
     }
@@ -149,9 +154,11 @@ float ar_visibility(Light l, vec3 p, vec3 n, float cosv) {
     int y0 = int(floor(ty - AR_SHADOW_FILTER_RADIUS)) + 1;
     float lit = 0.0;
     float total = 0.0;
-    for (int ky = y0; ky < y0 + 3; ky++) {
+    for (int j = 0; j < 3; j++) {
+        int ky = y0 + j;
         float wy = max(1.0 - abs(float(ky) - ty) / AR_SHADOW_FILTER_RADIUS, 0.0);
-        for (int kx = x0; kx < x0 + 3; kx++) {
+        for (int i = 0; i < 3; i++) {
+            int kx = x0 + i;
             float wx = max(1.0 - abs(float(kx) - tx) / AR_SHADOW_FILTER_RADIUS, 0.0);
             float w = wx * wy;
             ivec2 t = base + ivec2(clamp(kx, 0, s - 1), clamp(ky, 0, s - 1));

@@ -108,6 +108,7 @@ fn run(cli: Cli) -> Result<()> {
             methods,
             rays_per_link,
             subdivisions,
+            vpls,
             one_scheme,
             one_precision,
             backend,
@@ -128,6 +129,7 @@ fn run(cli: Cli) -> Result<()> {
             o.methods = methods.unwrap_or(o.methods);
             o.rays_per_link = rays_per_link.unwrap_or(o.rays_per_link);
             o.subdivisions = subdivisions.unwrap_or(o.subdivisions);
+            o.vpls = vpls.unwrap_or(o.vpls);
             o.both_schemes = !one_scheme;
             o.both_precisions = !one_precision;
             o.render.backend = backend;

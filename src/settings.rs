@@ -130,6 +130,9 @@ pub enum Method {
     /// Progressive refinement radiosity (Coombe and Harris, GPU Gems 2 ch. 39): the element
     /// with the most unshot energy shoots, visibility from a hemicube item buffer.
     ProgressiveRadiosity,
+    /// Instant radiosity (Keller 1997): virtual point lights traced from the lights, gathered
+    /// per pixel through their shadow maps.
+    InstantRadiosity,
 }
 spelled!(
     Method,
@@ -137,22 +140,28 @@ spelled!(
     [
         (Antiradiance, "antiradiance"),
         (HierarchicalRadiosity, "hierarchical-radiosity"),
-        (ProgressiveRadiosity, "progressive-radiosity")
+        (ProgressiveRadiosity, "progressive-radiosity"),
+        (InstantRadiosity, "instant-radiosity")
     ]
 );
 
 impl Method {
     /// Every method, in the order reports list them.
-    pub const ALL: [Method; 3] = [
+    pub const ALL: [Method; 4] = [
         Method::Antiradiance,
         Method::HierarchicalRadiosity,
         Method::ProgressiveRadiosity,
+        Method::InstantRadiosity,
     ];
 
     /// Whether the method solves on the links (progressive refinement computes its form
-    /// factors per shot and needs none, so linking is skipped).
+    /// factors per shot, instant radiosity traces paths: neither needs links, so linking is
+    /// skipped).
     pub fn uses_links(self) -> bool {
-        self != Method::ProgressiveRadiosity
+        !matches!(
+            self,
+            Method::ProgressiveRadiosity | Method::InstantRadiosity
+        )
     }
 
     /// Whether area emitters' direct light may come from shadow-mapped samples (§3.3).

@@ -76,6 +76,7 @@ fn tiny_study_writes_csv_and_plots() {
     o.spp = vec![1, 4, 16];
     o.rays_per_link = vec![4, 16];
     o.subdivisions = vec![0, 2];
+    o.vpls = vec![8, 32];
     let ctx = context();
     o.render = Options {
         context: Some(ctx.clone()),
@@ -91,13 +92,14 @@ fn tiny_study_writes_csv_and_plots() {
     println!("crossover: {cross:?}");
     // base, 64 bins (32 is the base), elem 0.25, asymmetric, f32: 5 configurations × 2
     // iterations; hierarchical radiosity at 4 and 16 rays per link and progressive refinement at
-    // subdivision 0 and 2, × 2 iterations; plus 3 path tracer runs.
-    assert_eq!(rows.len(), 21);
-    assert_eq!(logged, 21);
+    // subdivision 0 and 2, × 2 iterations; instant radiosity at 8 and 32 paths (one image
+    // each); plus 3 path tracer runs.
+    assert_eq!(rows.len(), 23);
+    assert_eq!(logged, 23);
     let csv = std::fs::read_to_string(dir.join("study.csv")).unwrap();
     let lines: Vec<&str> = csv.lines().collect();
     assert_eq!(lines[0], CSV_HEADER);
-    assert_eq!(lines.len(), 22);
+    assert_eq!(lines.len(), 24);
     let cols = CSV_HEADER.split(',').count();
     let families: Vec<&str> = lines[1..]
         .iter()
@@ -111,6 +113,7 @@ fn tiny_study_writes_csv_and_plots() {
         "precision",
         "rays_per_link",
         "subdivision",
+        "vpls",
         "spp",
     ] {
         assert!(families.contains(&f), "no {f} rows");
@@ -128,6 +131,11 @@ fn tiny_study_writes_csv_and_plots() {
             "progressive-radiosity" => {
                 assert!(r.links == Some(0) && r.shots.unwrap() > 0 && r.subdivision.is_some())
             }
+            "instant-radiosity" => assert!(
+                r.links == Some(0)
+                    && r.iterations == Some(1)
+                    && r.vpls.unwrap() >= r.vpl_paths.unwrap() as usize
+            ),
             _ => assert_eq!(r.method, "pathtracer"),
         }
     }

@@ -124,7 +124,7 @@ pub enum Command {
         json: Option<PathBuf>,
     },
     /// Error against run time: antiradiance over a sweep of settings, the baselines
-    /// (hierarchical radiosity, progressive refinement) and the path tracer at increasing spp,
+    /// (hierarchical radiosity, progressive refinement, instant radiosity) and the path tracer at increasing spp,
     /// measured against a reference; writes study.csv, error-vs-time.png and convergence.png
     /// into --out.
     Study {
@@ -149,8 +149,9 @@ pub enum Command {
         /// Path tracer sample counts, comma-separated (default 1,4,16,64,256).
         #[arg(long, value_delimiter = ',')]
         spp: Option<Vec<u32>>,
-        /// Methods measured, comma-separated (default: all three; the baselines run at the
-        /// scene's settings, after every iteration like antiradiance).
+        /// Methods measured, comma-separated (default: all four; hierarchical and progressive
+        /// radiosity run at the scene's settings, after every iteration like antiradiance;
+        /// instant radiosity once per --vpls).
         #[arg(long, value_enum, value_delimiter = ',')]
         methods: Option<Vec<Method>>,
         /// hierarchical-radiosity: visibility rays per link to try, comma-separated (default
@@ -161,6 +162,10 @@ pub enum Command {
         /// 0,2).
         #[arg(long, value_delimiter = ',')]
         subdivisions: Option<Vec<u32>>,
+        /// instant-radiosity: light paths to try, comma-separated, one image each (default
+        /// 16,64,256,1024).
+        #[arg(long, value_delimiter = ',')]
+        vpls: Option<Vec<u32>>,
         /// Skip the run with the other iteration scheme.
         #[arg(long)]
         one_scheme: bool,
@@ -270,6 +275,14 @@ pub struct BaselineArgs {
     /// progressive-radiosity: shots per iteration (default: a quarter of the elements).
     #[arg(long)]
     pub shots_per_iteration: Option<u32>,
+    /// instant-radiosity: light paths traced from the lights (each leaves a VPL at every
+    /// surface it reaches until Russian roulette ends it).
+    #[arg(long, default_value_t = antiradiance::methods::DEFAULT_VPLS)]
+    pub vpls: u32,
+    /// instant-radiosity: a VPL's light is bounded as from a disc of this many times the
+    /// surface area per VPL (0: the bare 1/r²).
+    #[arg(long, default_value_t = antiradiance::methods::DEFAULT_VPL_CLAMP, value_parser = finite)]
+    pub vpl_clamp: f64,
 }
 
 impl BaselineArgs {
@@ -281,6 +294,8 @@ impl BaselineArgs {
             subdivision: self.subdivision,
             gradient: self.gradient,
             shots_per_iteration: self.shots_per_iteration,
+            vpls: self.vpls,
+            vpl_clamp: self.vpl_clamp,
         }
     }
 }

@@ -62,7 +62,8 @@ pub trait Backend {
 
 /// Makes the backend of `options.method` on `options.backend` for `prep`; GPU backends use
 /// `ctx`. A method may first transform the prepared system (hierarchical radiosity puts its
-/// visibility into the links and turns antiradiance off).
+/// visibility into the links and turns antiradiance off; instant radiosity adds its VPLs to the
+/// lights).
 pub fn create(
     options: &super::Options,
     prep: &mut Prepared,
@@ -73,7 +74,7 @@ pub fn create(
             crate::error::Error::Device("the GPU backend needs a Vulkan context".into())
         })
     };
-    use crate::methods::{hierarchical, progressive};
+    use crate::methods::{hierarchical, instant, progressive};
     Ok(match (options.method, options.backend) {
         (Method::Antiradiance, BackendKind::Cpu) => Box::new(super::cpu::CpuBackend::new(prep)),
         (Method::Antiradiance, BackendKind::Gpu) => {
@@ -95,5 +96,14 @@ pub fn create(
         (Method::ProgressiveRadiosity, BackendKind::Gpu) => Box::new(
             progressive::gpu::GpuShooting::new(gpu()?, prep, &options.baseline)?,
         ),
+        (Method::InstantRadiosity, kind) => {
+            let report = instant::prepare(prep, options)?;
+            match kind {
+                BackendKind::Cpu => Box::new(instant::backend::CpuInstant::new(prep, report)),
+                BackendKind::Gpu => {
+                    Box::new(instant::backend::GpuInstant::new(gpu()?, prep, report)?)
+                }
+            }
+        }
     })
 }

@@ -12,6 +12,7 @@ use crate::plan::target::TargetChoice;
 use crate::plan::Plan;
 use crate::progress::Progress;
 use crate::scene::{Camera, Light, Scene, SolverSettings};
+use crate::settings::Method;
 use crate::system::System;
 
 /// A scene prepared for solving.
@@ -81,7 +82,24 @@ impl Prepared {
         let surfaces = Surfaces::new(scene, &system);
         // The analytic lights, then the area emitters' samples (§3.3).
         let mut lights = scene.lights.clone();
-        let emitter_choice = if options.method.samples_emitters() {
+        let emitter_choice = if options.method == Method::InstantRadiosity {
+            // Instant radiosity has no bins to take emission: its emitters are always sampled.
+            if settings.emitter_samples == Some(0) {
+                return Err(Error::Invalid(
+                    "instant-radiosity needs emitter samples (solver.emitter_samples = 0 sends \
+                     emission through the bins, which this method does not have)"
+                        .into(),
+                ));
+            }
+            emitters::choose(
+                scene,
+                Some(
+                    settings
+                        .emitter_samples
+                        .unwrap_or(emitters::DEFAULT_SAMPLES),
+                ),
+            )
+        } else if options.method.samples_emitters() {
             emitters::choose(scene, settings.emitter_samples)
         } else {
             emitters::Choice {
@@ -104,25 +122,8 @@ impl Prepared {
         {
             plan.decisions.push(emitter_choice.reason);
         }
-        let mut fallbacks = Vec::new();
-        // All views share one atlas of at most 16384² texels; halve the maps until they fit.
-        let (mut size, mut sample_size) = (options.shadow_map_size, emitters::SAMPLE_MAP_SIZE);
-        let maps = loop {
-            if let Some(m) = ShadowMaps::new(scene, &lights, size, sample_size) {
-                break m;
-            }
-            if size <= 16 && sample_size <= 16 {
-                return Err(Error::Invalid(format!(
-                    "{} lights' shadow maps do not fit a {MAX_ATLAS}² atlas even at 16² texels each",
-                    lights.len()
-                )));
-            }
-            (size, sample_size) = ((size / 2).max(16), (sample_size / 2).max(16));
-            fallbacks.push(format!(
-                "the shadow maps do not fit a {MAX_ATLAS}² atlas at {}² texels each; using {size}² ({sample_size}² for emitter samples)",
-                size * 2
-            ));
-        };
+        let (maps, fallbacks) =
+            fit_shadow_maps(scene, &lights, options.shadow_map_size, usize::MAX)?;
         Ok(Self {
             scene: scene.clone(),
             lights,
@@ -137,6 +138,35 @@ impl Prepared {
         })
     }
 
+    /// Re-plans and re-fits the shadow maps after a method added lights (instant radiosity's
+    /// VPLs, from `lights[first_vpl..]`); earlier decisions are kept after the new plan's.
+    pub fn relight(
+        &mut self,
+        shadow_map_size: u32,
+        first_vpl: usize,
+        all_passes: bool,
+    ) -> Result<()> {
+        let old = std::mem::take(&mut self.plan.decisions);
+        self.plan = Plan::new(
+            &self.scene,
+            &self.lights,
+            &self.system,
+            &self.surfaces,
+            self.settings.precision,
+            all_passes,
+        );
+        for d in old {
+            if !self.plan.decisions.contains(&d) {
+                self.plan.decisions.push(d);
+            }
+        }
+        let (maps, fallbacks) =
+            fit_shadow_maps(&self.scene, &self.lights, shadow_map_size, first_vpl)?;
+        self.maps = maps;
+        self.fallbacks.extend(fallbacks);
+        Ok(())
+    }
+
     /// The same prepared scene with every pass on at the plan's table precision (what
     /// `profile` times the plan against).
     pub fn with_every_pass(&self) -> Self {
@@ -146,5 +176,48 @@ impl Prepared {
             ..Plan::everything(&self.scene, &self.lights, &self.system, &self.surfaces)
         };
         p
+    }
+}
+
+/// Every light's shadow-map views in one atlas of at most [`MAX_ATLAS`]² texels: analytic
+/// lights' maps at `size`², emitter samples' at [`emitters::SAMPLE_MAP_SIZE`]², VPLs (lights from
+/// `first_vpl` on) at [`crate::methods::instant::VPL_MAP_SIZE`]²; all halved together until they
+/// fit, each halving a fallback sentence.
+pub fn fit_shadow_maps(
+    scene: &Scene,
+    lights: &[Light],
+    size: u32,
+    first_vpl: usize,
+) -> Result<(ShadowMaps, Vec<String>)> {
+    let mut fallbacks = Vec::new();
+    let (mut size, mut sample, mut vpl) = (
+        size,
+        emitters::SAMPLE_MAP_SIZE,
+        crate::methods::instant::VPL_MAP_SIZE,
+    );
+    loop {
+        let sides: Vec<u32> = lights
+            .iter()
+            .enumerate()
+            .map(|(i, l)| match l {
+                _ if i >= first_vpl => vpl,
+                Light::EmitterSample { .. } => sample,
+                _ => size,
+            })
+            .collect();
+        if let Some(m) = ShadowMaps::with_sides(scene, lights, size, &sides) {
+            return Ok((m, fallbacks));
+        }
+        if size <= 16 && sample <= 16 && vpl <= 16 {
+            return Err(Error::Invalid(format!(
+                "{} lights' shadow maps do not fit a {MAX_ATLAS}² atlas even at 16² texels each",
+                lights.len()
+            )));
+        }
+        (size, sample, vpl) = ((size / 2).max(16), (sample / 2).max(16), (vpl / 2).max(16));
+        fallbacks.push(format!(
+            "the shadow maps do not fit a {MAX_ATLAS}² atlas at {}² texels each; using {size}² ({sample}² for emitter samples, {vpl}² for VPLs)",
+            size * 2
+        ));
     }
 }

@@ -283,18 +283,27 @@ impl ShadowMaps {
     /// lights' maps of `size`² texels, emitter samples' of `sample_size`², packed into one atlas
     /// in rows. Returns `None` when the atlas would exceed [`MAX_ATLAS`] on a side.
     pub fn new(scene: &Scene, lights: &[Light], size: u32, sample_size: u32) -> Option<Self> {
+        let sides: Vec<u32> = lights
+            .iter()
+            .map(|l| match l {
+                Light::EmitterSample { .. } => sample_size,
+                _ => size,
+            })
+            .collect();
+        Self::with_sides(scene, lights, size, &sides)
+    }
+
+    /// [`ShadowMaps::new`] with each light's map side given (`sides[i]` for `lights[i]`;
+    /// `size` is reported as the analytic lights' side): instant radiosity's VPLs get smaller
+    /// maps than the emitter samples.
+    pub fn with_sides(scene: &Scene, lights: &[Light], size: u32, sides: &[u32]) -> Option<Self> {
         let (lo, hi) = scene.bounds();
         let (center, radius) = ((lo + hi) * 0.5, ((hi - lo).length() * 0.5).max(1e-6));
         let mut views = Vec::new();
         let mut light_views = Vec::new();
-        for light in lights {
+        for (light, &side) in lights.iter().zip(sides) {
             let first = views.len();
             light_views_of(light, center, radius, &mut views);
-            let side = if matches!(light, Light::EmitterSample { .. }) {
-                sample_size
-            } else {
-                size
-            };
             for v in &mut views[first..] {
                 v.size = side;
             }

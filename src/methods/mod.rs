@@ -7,6 +7,7 @@
 //! formation, so their images differ from antiradiance's only by the method.
 
 pub mod hierarchical;
+pub mod instant;
 pub mod progressive;
 pub mod visibility;
 
@@ -30,6 +31,12 @@ pub struct MethodSettings {
     pub gradient: f64,
     /// Progressive refinement: shots per iteration; `None`: a quarter of the elements.
     pub shots_per_iteration: Option<u32>,
+    /// Instant radiosity: light paths traced (each leaves a VPL at its first hit, Russian
+    /// roulette about `ρ/(1−ρ)` more).
+    pub vpls: u32,
+    /// Instant radiosity: the clamp's disc area in units of the scene's surface area per VPL
+    /// (0: no clamp, the bare `1/r²`).
+    pub vpl_clamp: f64,
 }
 
 impl Default for MethodSettings {
@@ -40,9 +47,18 @@ impl Default for MethodSettings {
             subdivision: DEFAULT_SUBDIVISION,
             gradient: DEFAULT_GRADIENT,
             shots_per_iteration: None,
+            vpls: DEFAULT_VPLS,
+            vpl_clamp: DEFAULT_VPL_CLAMP,
         }
     }
 }
+
+/// Default light paths of instant radiosity (README, "Instant radiosity": chosen by
+/// measurement on the Cornell box).
+pub const DEFAULT_VPLS: u32 = 256;
+
+/// Default clamp of instant radiosity: a VPL's disc is the surface area it stands for.
+pub const DEFAULT_VPL_CLAMP: f64 = 1.0;
 
 /// Default visibility rays per link of hierarchical radiosity (README, "Baselines": chosen by
 /// measurement on the Cornell box).
@@ -86,6 +102,17 @@ impl MethodSettings {
             return bad(format!(
                 "--gradient must be non-negative and finite, got {}",
                 self.gradient
+            ));
+        }
+        // The GPU frame loops over every light per pixel; llvmpipe caps a loop at 65535
+        // iterations, and paths leave up to ~2 VPLs each in the bundled scenes.
+        if !(1..=16384).contains(&self.vpls) {
+            return bad(format!("--vpls must be 1..=16384, got {}", self.vpls));
+        }
+        if !(self.vpl_clamp >= 0.0 && self.vpl_clamp.is_finite()) {
+            return bad(format!(
+                "--vpl-clamp must be non-negative and finite, got {}",
+                self.vpl_clamp
             ));
         }
         if let Some(0) = self.shots_per_iteration {

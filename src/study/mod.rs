@@ -2,7 +2,8 @@
 //! (iterations 1..N for each of: bins, element sizes, the other scheme, the other precision,
 //! each varied alone around the scene's own settings), the baselines as families of their own
 //! (hierarchical radiosity with explicit visibility per rays-per-link setting, progressive
-//! refinement per subdivision setting, iterations 1..N each, at the scene's settings) and the
+//! refinement per subdivision setting, iterations 1..N each, at the scene's settings; instant
+//! radiosity once per VPL count) and the
 //! path tracer at increasing sample counts, measures wall time (linking apart from the per-frame
 //! solve) and the error against a reference, for the full image and for indirect light alone,
 //! and writes `study.csv`, `error-vs-time.png` and `convergence.png`.
@@ -49,6 +50,8 @@ pub struct StudyOptions {
     pub rays_per_link: Vec<u32>,
     /// Receiver subdivision levels of the progressive-refinement runs, one run each.
     pub subdivisions: Vec<u32>,
+    /// Light paths of the instant-radiosity runs, one image each (they form one curve).
+    pub vpls: Vec<u32>,
 }
 
 impl StudyOptions {
@@ -68,6 +71,7 @@ impl StudyOptions {
             methods: Method::ALL.to_vec(),
             rays_per_link: vec![4, 16, crate::methods::DEFAULT_RAYS_PER_LINK, 141],
             subdivisions: vec![0, crate::methods::DEFAULT_SUBDIVISION],
+            vpls: vec![16, 64, crate::methods::DEFAULT_VPLS, 1024],
         }
     }
 }
@@ -75,11 +79,12 @@ impl StudyOptions {
 /// One row of `study.csv`.
 #[derive(Debug, Clone)]
 pub struct Row {
-    /// `antiradiance`, `hierarchical-radiosity`, `progressive-radiosity` or `pathtracer`.
+    /// `antiradiance`, `hierarchical-radiosity`, `progressive-radiosity`, `instant-radiosity`
+    /// or `pathtracer`.
     pub method: &'static str,
     /// The parameter varied in this run's family: `base`, `bins`, `element_size`, `scheme`,
     /// `precision` (antiradiance), `rays_per_link` (hierarchical radiosity), `subdivision`
-    /// (progressive refinement), or `spp`.
+    /// (progressive refinement), `vpls` (instant radiosity), or `spp`.
     pub family: String,
     /// Label of the run's curve in the plots.
     pub label: String,
@@ -121,6 +126,10 @@ pub struct Row {
     pub subdivision: Option<u32>,
     /// Shots up to this image (progressive refinement).
     pub shots: Option<usize>,
+    /// Light paths traced (instant radiosity).
+    pub vpl_paths: Option<u32>,
+    /// VPLs those paths left (instant radiosity).
+    pub vpls: Option<usize>,
 }
 
 impl Row {
@@ -248,6 +257,19 @@ fn configs(scene: &Scene, o: &StudyOptions) -> Result<Vec<Config>> {
             });
         }
     }
+    if o.methods.contains(&Method::InstantRadiosity) {
+        // One image per VPL count, all on one curve: nothing iterates.
+        for &v in &o.vpls {
+            out.push(Config {
+                family: "vpls",
+                label: "instant radiosity".into(),
+                options: with(Method::InstantRadiosity, &|r| {
+                    r.baseline.vpls = v;
+                    r.solver.iterations = Some(1);
+                }),
+            });
+        }
+    }
     if !o.methods.contains(&Method::Antiradiance) {
         return Ok(out);
     }
@@ -350,8 +372,9 @@ pub fn run(
                 label: c.label.clone(),
                 bins: Some(stats.bins),
                 element_size: Some(s.element_size),
-                // Progressive refinement has no scheme; a baseline reports its own precision.
-                scheme: (method != Method::ProgressiveRadiosity).then_some(s.scheme),
+                // Progressive refinement and instant radiosity have no scheme; a baseline
+                // reports its own precision.
+                scheme: (method.uses_links()).then_some(s.scheme),
                 precision: (o.render.backend == BackendKind::Gpu).then_some(
                     if method == Method::Antiradiance {
                         s.precision
@@ -377,6 +400,8 @@ pub fn run(
                 subdivision: (method == Method::ProgressiveRadiosity)
                     .then_some(c.options.baseline.subdivision),
                 shots: per_iteration.map(|n| (k * n as usize).min(report.shots.len())),
+                vpl_paths: (method == Method::InstantRadiosity).then_some(c.options.baseline.vpls),
+                vpls: report.figures.get("vpls").map(|&v| v as usize),
             };
             log(&row);
             rows.push(row);
@@ -418,6 +443,8 @@ pub fn run(
             rays_per_link: None,
             subdivision: None,
             shots: None,
+            vpl_paths: None,
+            vpls: None,
         };
         log(&row);
         rows.push(row);
@@ -428,7 +455,7 @@ pub fn run(
 /// The CSV header of [`csv`].
 pub const CSV_HEADER: &str = "method,family,bins,element_size,scheme,precision,iterations,spp,\
 elements,links,linking_ms,setup_ms,frame_ms,total_ms,residual,rel_rmse,mare,flip,indirect_rel_rmse,\
-indirect_mare,indirect_flip,fallbacks,rays_per_link,subdivision,shots";
+indirect_mare,indirect_flip,fallbacks,rays_per_link,subdivision,shots,vpl_paths,vpls";
 
 /// `study.csv`: one row per run, empty fields where a column does not apply.
 pub fn csv(rows: &[Row]) -> String {
@@ -441,7 +468,7 @@ pub fn csv(rows: &[Row]) -> String {
         let ind = |f: fn(&Metrics) -> f64| opt(r.indirect.as_ref().map(f));
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3},{},{:.6e},{:.6e},{:.6e},{},{},{},\"{}\",{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3},{},{:.6e},{:.6e},{:.6e},{},{},{},\"{}\",{},{},{},{},{}",
             r.method,
             r.family,
             opt(r.bins),
@@ -467,6 +494,8 @@ pub fn csv(rows: &[Row]) -> String {
             opt(r.rays_per_link),
             opt(r.subdivision),
             opt(r.shots),
+            opt(r.vpl_paths),
+            opt(r.vpls),
         );
     }
     s

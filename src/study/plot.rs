@@ -1,7 +1,7 @@
 //! The study's figures (plotters, bitmap backend, the bundled DejaVu Sans font):
 //! `error-vs-time.png` (log-log error against time to the image, a curve per run: antiradiance
 //! solid with circles, hierarchical radiosity dashed with triangles, progressive refinement
-//! short-dashed with crosses, the path tracer thick black; each method's equal-time comparison
+//! short-dashed with crosses, instant radiosity long-dashed with squares, the path tracer thick black; each method's equal-time comparison
 //! with the path tracer stated, antiradiance's crossover marked; full image and indirect light)
 //! and `convergence.png` (residual and error per iteration).
 
@@ -191,12 +191,15 @@ enum Style {
     Solid,
     Dashed,
     Dotted,
+    /// Instant radiosity: long dashes with squares, one point per VPL count.
+    LongDashed,
 }
 
 fn style_of(method: &str) -> Style {
     match method {
         "hierarchical-radiosity" => Style::Dashed,
         "progressive-radiosity" => Style::Dotted,
+        "instant-radiosity" => Style::LongDashed,
         _ => Style::Solid,
     }
 }
@@ -218,6 +221,7 @@ where
         Style::Solid => None,
         Style::Dashed => Some((10, 6)),
         Style::Dotted => Some((3, 4)),
+        Style::LongDashed => Some((18, 5)),
     };
     let anno = match dash {
         None => chart
@@ -241,6 +245,10 @@ where
         Style::Dotted => {
             chart.draw_series(pts.iter().map(|&p| Cross::new(p, 4, color.stroke_width(2))))
         }
+        Style::LongDashed => chart
+            .draw_series(pts.iter().map(|&p| {
+                EmptyElement::at(p) + Rectangle::new([(-3, -3), (3, 3)], color.filled())
+            })),
     }
     .map_err(|e| err(path, e))?;
     Ok(())
@@ -362,7 +370,8 @@ pub fn convergence(rows: &[Row], path: &Path) -> Result<()> {
     let areas = root.split_evenly((1, 2));
     let ar: Vec<Row> = rows
         .iter()
-        .filter(|r| r.method != "pathtracer")
+        // Instant radiosity does not iterate: it is on the error-against-time plot only.
+        .filter(|r| r.method != "pathtracer" && r.method != "instant-radiosity")
         .cloned()
         .collect();
     let kmax = ar
@@ -473,6 +482,8 @@ mod tests {
             rays_per_link: None,
             subdivision: None,
             shots: None,
+            vpl_paths: None,
+            vpls: None,
         }
     }
 
