@@ -230,6 +230,7 @@ fn run(cli: Cli) -> Result<()> {
             output,
             exr,
             json,
+            time,
             solver,
             tolerance,
             max_iterations,
@@ -245,7 +246,10 @@ fn run(cli: Cli) -> Result<()> {
             let png = (output.is_some() || exr.is_none())
                 .then(|| output.clone().unwrap_or_else(|| PathBuf::from("out.png")));
             check_outputs([png.as_ref(), exr.as_ref(), json.as_ref()])?;
-            let s = load(scene)?;
+            let mut s = load(scene)?;
+            if let Some(t) = time {
+                s.move_to(t);
+            }
             let mut o = plan.options();
             o.solver = solver.overrides();
             o.solver.tolerance = tolerance;

@@ -62,6 +62,10 @@ pub enum Command {
         /// Write statistics as JSON to this file.
         #[arg(long)]
         json: Option<PathBuf>,
+        /// Scene time in seconds: keyframed objects and lights as they stand then, solved from
+        /// scratch (the check for `animate`'s frames).
+        #[arg(long, allow_negative_numbers = true, value_parser = finite)]
+        time: Option<f64>,
         #[command(flatten)]
         solver: SolverArgs,
         /// Iterate until the estimated error (distance to the discrete system's fixed point, not
