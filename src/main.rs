@@ -81,6 +81,37 @@ fn main() -> std::process::ExitCode {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
+        Command::Animate {
+            scene,
+            out,
+            frames,
+            fps,
+            exr,
+            iterations_per_frame,
+            solver,
+            size,
+            exposure,
+            backend,
+            shadow_map_size,
+            device,
+        } => {
+            let s = load(Some(scene))?;
+            let name = scene_name(&s);
+            let args = cli::animate::AnimateArgs {
+                out,
+                frames,
+                fps,
+                exr,
+                iterations_per_frame,
+                solver,
+                size,
+                exposure,
+                backend,
+                shadow_map_size,
+                device,
+            };
+            cli::animate::run(&s, args, &name)?;
+        }
         Command::Compare {
             test,
             reference,
