@@ -110,24 +110,43 @@ impl Engine {
     /// tables are uploaded here (the result image is a new one: hosts re-read
     /// [`super::gpu::GpuBackend::frame`] after an update).
     pub fn update(&mut self) -> Result<()> {
+        if self.method != crate::settings::Method::Antiradiance {
+            return Err(Error::Invalid(format!(
+                "moving objects and lights need the antiradiance method, not {}",
+                self.method
+            )));
+        }
         let Some(scene) = self.next.take() else {
             return Ok(());
         };
+        let ms = |t: Instant| t.elapsed().as_secs_f64() * 1e3;
         let t = Instant::now();
         let old = self.backend.i_ex()?;
         let ctx = self.backend.as_gpu().map(|g| g.context().clone());
         let memory = ctx.as_ref().map(|c| c.info.device_local_bytes);
         let mut prep = Prepared::new(&scene, &self.options, memory, &Silent)?;
         let warm = carry_over(&self.prep.system, &prep.system, &old);
+        let prepare_ms = ms(t);
+        let t1 = Instant::now();
         let mut backend = backend::create(&self.options, &mut prep, ctx)?;
+        let backend_ms = ms(t1);
+        let t2 = Instant::now();
         backend.prepare_lights(&mut prep)?;
+        let lights_ms = ms(t2);
+        let t3 = Instant::now();
         match &warm {
             Some(table) => backend.warm_start(&prep, table)?,
             None => backend.initialize(&prep)?,
         }
         self.backend = backend;
         self.prep = prep;
-        self.update_ms = t.elapsed().as_secs_f64() * 1e3;
+        self.update_times = UpdateTimes {
+            prepare_ms,
+            backend_ms,
+            lights_ms,
+            carry_ms: ms(t3),
+            total_ms: ms(t),
+        };
         self.warm = warm.is_some();
         Ok(())
     }
@@ -141,9 +160,9 @@ impl Engine {
         self.update()
     }
 
-    /// Milliseconds the last [`Engine::update`] took (0 before any).
-    pub fn update_ms(&self) -> f64 {
-        self.update_ms
+    /// How long the last [`Engine::update`] took, by part (zero before any).
+    pub fn update_times(&self) -> UpdateTimes {
+        self.update_times
     }
 
     /// Whether the last [`Engine::update`] continued from the previous solution (false when the
@@ -151,6 +170,23 @@ impl Engine {
     pub fn warm_started(&self) -> bool {
         self.warm
     }
+}
+
+/// The parts of one [`Engine::update`], milliseconds.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct UpdateTimes {
+    /// Discretizing and linking the moved scene, planning, and mapping the old solution
+    /// onto it (includes reading I_ex back from the GPU).
+    pub prepare_ms: f64,
+    /// Creating the backend's tables, link buffers and frame (GPU: allocations, uploads,
+    /// pipelines from the cache).
+    pub backend_ms: f64,
+    /// Shadow maps of every light and the leaves' direct light.
+    pub lights_ms: f64,
+    /// Handing the carried-over solution to the backend (GPU: its upload).
+    pub carry_ms: f64,
+    /// The whole update.
+    pub total_ms: f64,
 }
 
 /// The previous solution `old` (rows of `before`'s nodes) as rows of `after`'s: each leaf's row
