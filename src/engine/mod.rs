@@ -61,6 +61,8 @@ pub struct Engine {
     update_times: motion::UpdateTimes,
     /// Whether the last update carried the solution over.
     warm: bool,
+    /// Whether the last update linked again.
+    relinked: bool,
     /// Residual of the last iteration [`Engine::iterate`] ran.
     last_residual: Option<f64>,
 }
@@ -158,6 +160,7 @@ impl Engine {
             time: 0.0,
             update_times: motion::UpdateTimes::default(),
             warm: false,
+            relinked: false,
             last_residual: None,
         })
     }

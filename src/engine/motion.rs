@@ -3,8 +3,9 @@
 //! [`Engine::update`] makes the engine follow, and the next iterations continue from the
 //! previous frame's solution (warm start).
 //!
-//! What `update` does now is a **per-frame re-preparation**: the moved scene is discretized and
-//! linked again and the backend's tables are made anew (the shadow maps and direct light of
+//! Where only lights moved, `update` keeps the elements and links and makes the lights, plan,
+//! shadow maps and backend anew. Where objects moved it is a **per-frame re-preparation**: the
+//! moved scene is discretized and linked again and the backend's tables are made anew (the shadow maps and direct light of
 //! every light, the links and form factors of everything), then the previous I_ex is carried
 //! over leaf by leaf (elements keep their index: a rigid motion subdivides a mesh the same way)
 //! and pulled into the new hierarchy. It is correct for any motion, at the price of relinking
@@ -124,8 +125,21 @@ impl Engine {
         let old = self.backend.i_ex()?;
         let ctx = self.backend.as_gpu().map(|g| g.context().clone());
         let memory = ctx.as_ref().map(|c| c.info.device_local_bytes);
-        let mut prep = Prepared::new(&scene, &self.options, memory, &Silent)?;
-        let warm = carry_over(&self.prep.system, &prep.system, &old);
+        // Only lights moved: the elements and links stay (no relinking), the solution carries
+        // over row for row.
+        let still = scene
+            .meshes
+            .iter()
+            .zip(&self.prep.scene.meshes)
+            .all(|(a, b)| a.positions == b.positions);
+        let (mut prep, warm) = if still {
+            (self.prep.relit(&scene, &self.options)?, Some(old))
+        } else {
+            let prep = Prepared::new(&scene, &self.options, memory, &Silent)?;
+            let warm = carry_over(&self.prep.system, &prep.system, &old);
+            (prep, warm)
+        };
+        self.relinked = !still;
         let prepare_ms = ms(t);
         let t1 = Instant::now();
         let mut backend = backend::create(&self.options, &mut prep, ctx)?;
@@ -163,6 +177,12 @@ impl Engine {
     /// How long the last [`Engine::update`] took, by part (zero before any).
     pub fn update_times(&self) -> UpdateTimes {
         self.update_times
+    }
+
+    /// Whether the last [`Engine::update`] discretized and linked the scene again (objects
+    /// moved); false where only lights moved and the links were kept.
+    pub fn relinked(&self) -> bool {
+        self.relinked
     }
 
     /// Whether the last [`Engine::update`] continued from the previous solution (false when the
