@@ -1,4 +1,5 @@
-//! The binary's parts: argument definitions and progress bars.
+//! The binary's parts: argument definitions, progress bars and the `animate` command.
 
+pub mod animate;
 pub mod args;
 pub mod progress;
