@@ -184,6 +184,31 @@ pub enum Command {
         #[arg(long)]
         diff: Option<PathBuf>,
     },
+    /// Open a window on the scene (GPU backend): solve, then draw from a camera you move.
+    #[command(after_help = VIEW_BINDINGS)]
+    View {
+        /// Scene TOML (default: the bundled Cornell box).
+        scene: Option<PathBuf>,
+        #[command(flatten)]
+        solver: SolverArgs,
+        /// Window and frame size (default: the scene camera's `width` × `height`).
+        #[command(flatten)]
+        size: SizeArgs,
+        /// Present this many frames, then exit.
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+        frames: Option<u32>,
+        /// With --frames: save the last presented image (PNG, window size) here.
+        #[arg(long, requires = "frames")]
+        screenshot: Option<PathBuf>,
+        /// Shadow map side in texels.
+        #[arg(long, default_value_t = 1024)]
+        shadow_map_size: u32,
+        /// Vulkan device whose name contains this (default: prefer a discrete GPU).
+        #[arg(long)]
+        device: Option<String>,
+        #[command(flatten)]
+        plan: PlanArgs,
+    },
     /// Time the GPU passes (global, push, local, pull) per frame, like the paper's Table 2.
     Profile {
         /// Scene TOML (default: the bundled Cornell box).
@@ -210,6 +235,14 @@ pub enum Command {
         plan: PlanArgs,
     },
 }
+
+/// `view`'s key and mouse bindings, shown after its options in `--help`.
+const VIEW_BINDINGS: &str = "\
+Mouse: left drag turns (orbit: the eye around the target; fly: the view about the eye);
+       wheel zooms (orbit) or moves forward (fly).
+Keys:  W/S forward/back, A/D left/right, Q/E down/up (eye and target together, 2% of the
+       scene per press); F switches orbit/fly; R resets to the scene's camera; Esc quits.
+The title shows the frame rate and the frame's GPU pass times (ms).";
 
 /// Solver settings that replace the scene's.
 #[derive(Args)]
