@@ -217,6 +217,7 @@ fn run(cli: Cli) -> Result<()> {
             size,
             frames,
             screenshot,
+            resize,
             shadow_map_size,
             device,
             plan,
@@ -235,6 +236,7 @@ fn run(cli: Cli) -> Result<()> {
                 options: o,
                 frames,
                 screenshot,
+                resize,
             })
             .with_context(|| name)?;
         }

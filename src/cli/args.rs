@@ -23,6 +23,18 @@ fn positive(s: &str) -> Result<f64, String> {
     }
 }
 
+/// A window size `WxH`, each side 1..=16384.
+fn window_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X', '×'])
+        .ok_or_else(|| format!("expected WxH, got `{s}`"))?;
+    let side = |v: &str| match v.trim().parse::<u32>() {
+        Ok(n) if (1..=16384).contains(&n) => Ok(n),
+        _ => Err(format!("each side must be 1..=16384, got `{v}`")),
+    };
+    Ok((side(w)?, side(h)?))
+}
+
 /// `antiradiance`: global illumination with implicit visibility and antiradiance.
 #[derive(Parser)]
 #[command(
@@ -200,6 +212,10 @@ pub enum Command {
         /// With --frames: save the last presented image (PNG, window size) here.
         #[arg(long, requires = "frames")]
         screenshot: Option<PathBuf>,
+        /// With --frames: resize the window to W×H (e.g. `192x160`) after the first frame (the
+        /// swapchain follows the window; the frame is scaled to fit, keeping its aspect).
+        #[arg(long, requires = "frames", value_parser = window_size)]
+        resize: Option<(u32, u32)>,
         /// Shadow map side in texels.
         #[arg(long, default_value_t = 1024)]
         shadow_map_size: u32,

@@ -38,6 +38,8 @@ pub struct ViewRequest {
     pub frames: Option<u32>,
     /// After the last of `frames`, save the presented image here (PNG).
     pub screenshot: Option<PathBuf>,
+    /// After the first frame, ask for this window size.
+    pub resize: Option<(u32, u32)>,
 }
 
 /// Opens the window and runs until it is closed (or `frames` were presented).
@@ -149,6 +151,10 @@ impl ApplicationHandler for App {
                     Ok(done) => done,
                     Err(e) => return self.fail(el, e),
                 };
+                if let (1, Some((w, h))) = (v.presented, self.req.resize) {
+                    // Applied now or by a later Resized event; `frame` checks the size too.
+                    let _ = v.window.request_inner_size(PhysicalSize::new(w, h));
+                }
                 if done {
                     el.exit();
                 } else if self.req.frames.is_some() {
@@ -293,7 +299,11 @@ impl Viewer {
         if size.width == 0 || size.height == 0 {
             return Ok(false); // minimized: nothing to present to
         }
-        if self.stale || self.swap.is_none() {
+        let resized = self
+            .swap
+            .as_ref()
+            .is_some_and(|s| (s.extent.width, s.extent.height) != (size.width, size.height));
+        if self.stale || resized || self.swap.is_none() {
             let old = self.swap.take();
             self.swap = Some(Swapchain::new(&self.host, (size.width, size.height), old)?);
             self.stale = false;
