@@ -204,7 +204,7 @@ fn view_screenshot_is_the_rendered_scene() {
         expected.len()
     );
     // Measured 8.0e-3, largest difference 1/255 (the reference went through 8 bits before
-    // scaling, the blit did not). Bound 3×; misplaced by one pixel it was 0.16.
+    // scaling, the blit did not). Bound 3×.
     assert!(rmse <= 2.4e-2, "relative RMSE {rmse:.2e}");
     assert!(worst <= 2, "largest difference {worst}");
     let _ = std::fs::remove_dir_all(&dir);
