@@ -186,6 +186,8 @@ struct Viewer {
     last: Option<Instant>,
     /// Smoothed seconds per frame.
     frame_s: f64,
+    /// When the first frame was presented (the `--frames` summary's rate starts there).
+    first: Option<Instant>,
     linear_blit: bool,
     host: Host,
     window: Window,
@@ -248,6 +250,7 @@ impl Viewer {
             presented: 0,
             last: None,
             frame_s: 0.0,
+            first: None,
             linear_blit: false,
             host,
             window,
@@ -409,7 +412,19 @@ impl Viewer {
             Err(e) => return Err(e).context("presenting"),
         }
         self.presented += 1;
-        self.title()?;
+        let passes = self.title()?;
+        let first = *self.first.get_or_insert_with(Instant::now);
+        if last && self.presented > 1 {
+            let s = first.elapsed().as_secs_f64() / (self.presented - 1) as f64;
+            eprintln!(
+                "presented {} frames of {}×{}: {:.1} fps after the first ({:.1} ms per frame; last frame's GPU ms: {passes})",
+                self.presented,
+                extent.width,
+                extent.height,
+                1.0 / s,
+                s * 1e3
+            );
+        }
         if let (Some(r), Some(path)) = (&readback, shot) {
             let bytes = r.read(&self.host);
             r.destroy(&self.host);
@@ -436,8 +451,8 @@ impl Viewer {
         Ok(last)
     }
 
-    /// Frame rate and the frame's GPU pass times in the title.
-    fn title(&mut self) -> Result<()> {
+    /// Frame rate and the frame's GPU pass times in the title; returns the pass times.
+    fn title(&mut self) -> Result<String> {
         let now = Instant::now();
         if let Some(t) = self.last.replace(now) {
             let dt = (now - t).as_secs_f64();
@@ -460,11 +475,11 @@ impl Viewer {
         } else {
             "– fps".into()
         };
+        let passes = passes.join(", ");
         self.window.set_title(&format!(
-            "antiradiance · {rate} · GPU ms: {} · {mode:?}",
-            passes.join(", ")
+            "antiradiance · {rate} · GPU ms: {passes} · {mode:?}"
         ));
-        Ok(())
+        Ok(passes)
     }
 }
 
