@@ -8,6 +8,7 @@
 
 #![warn(missing_docs)]
 
+pub mod animate;
 pub mod bins;
 pub mod brdf;
 pub mod elements;

@@ -81,6 +81,37 @@ fn main() -> std::process::ExitCode {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
+        Command::Animate {
+            scene,
+            out,
+            frames,
+            fps,
+            exr,
+            iterations_per_frame,
+            solver,
+            size,
+            exposure,
+            backend,
+            shadow_map_size,
+            device,
+        } => {
+            let s = load(Some(scene))?;
+            let name = scene_name(&s);
+            let args = cli::animate::AnimateArgs {
+                out,
+                frames,
+                fps,
+                exr,
+                iterations_per_frame,
+                solver,
+                size,
+                exposure,
+                backend,
+                shadow_map_size,
+                device,
+            };
+            cli::animate::run(&s, args, &name)?;
+        }
         Command::Compare {
             test,
             reference,
@@ -259,6 +290,7 @@ fn run(cli: Cli) -> Result<()> {
             output,
             exr,
             json,
+            time,
             solver,
             tolerance,
             max_iterations,
@@ -274,7 +306,10 @@ fn run(cli: Cli) -> Result<()> {
             let png = (output.is_some() || exr.is_none())
                 .then(|| output.clone().unwrap_or_else(|| PathBuf::from("out.png")));
             check_outputs([png.as_ref(), exr.as_ref(), json.as_ref()])?;
-            let s = load(scene)?;
+            let mut s = load(scene)?;
+            if let Some(t) = time {
+                s.move_to(t);
+            }
             let mut o = plan.options();
             o.solver = solver.overrides();
             o.solver.tolerance = tolerance;

@@ -74,6 +74,10 @@ pub enum Command {
         /// Write statistics as JSON to this file.
         #[arg(long)]
         json: Option<PathBuf>,
+        /// Scene time in seconds: keyframed objects and lights as they stand then, solved from
+        /// scratch (the check for `animate`'s frames).
+        #[arg(long, allow_negative_numbers = true, value_parser = finite)]
+        time: Option<f64>,
         #[command(flatten)]
         solver: SolverArgs,
         /// Iterate until the estimated error (distance to the discrete system's fixed point, not
@@ -105,6 +109,45 @@ pub enum Command {
         device: Option<String>,
         #[command(flatten)]
         plan: PlanArgs,
+    },
+    /// Render the scene's animation headless: DIR/frame-0000.png … (and .exr with --exr) and
+    /// DIR/frames.csv (frame, time, update_ms, solve_ms, draw_ms, total_ms, iterations,
+    /// residual); the first frame is solved from scratch, every later one continues from the
+    /// previous with `solver.iterations_per_frame` iterations.
+    Animate {
+        /// Scene TOML with keyframes.
+        scene: PathBuf,
+        /// Output directory (created if missing).
+        #[arg(long)]
+        out: PathBuf,
+        /// Number of frames (default: the animation's duration × fps).
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+        frames: Option<u32>,
+        /// Frames per second of scene time (default 24).
+        #[arg(long, value_parser = positive)]
+        fps: Option<f64>,
+        /// Also write each frame as EXR (linear radiance).
+        #[arg(long)]
+        exr: bool,
+        /// Override `solver.iterations_per_frame`.
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=antiradiance::scene::MAX_ITERATIONS as i64))]
+        iterations_per_frame: Option<u32>,
+        #[command(flatten)]
+        solver: SolverArgs,
+        #[command(flatten)]
+        size: SizeArgs,
+        /// PNG exposure in stops.
+        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite)]
+        exposure: f64,
+        /// Which implementation solves and draws.
+        #[arg(long, value_enum, default_value_t = BackendKind::Gpu)]
+        backend: BackendKind,
+        /// Shadow map side in texels.
+        #[arg(long, default_value_t = 1024)]
+        shadow_map_size: u32,
+        /// Vulkan device whose name contains this (default: prefer a discrete GPU).
+        #[arg(long)]
+        device: Option<String>,
     },
     /// Path-traced ground truth (unbiased, CPU, all cores) to EXR, with its direct part and
     /// per-pixel standard error beside it (REF.direct.exr, REF.stderr.exr).

@@ -57,6 +57,14 @@ pub trait Backend {
     fn memory(&self) -> MemoryReport;
     /// The GPU backend, for recording into a host's command buffers.
     fn as_gpu(&mut self) -> Option<&mut super::gpu::GpuBackend>;
+    /// Continues from `i_ex` (unscaled, one row per node of `prep.system`, clusters pulled)
+    /// instead of the initial state: the previous frame's solution after objects or lights
+    /// moved (§3.3). Baseline methods keep no such state and refuse.
+    fn warm_start(&mut self, _prep: &Prepared, _i_ex: &Table) -> Result<()> {
+        Err(crate::error::Error::Invalid(
+            "moving objects and lights need the antiradiance method".into(),
+        ))
+    }
     /// What a baseline method reports of its own (`None` for antiradiance).
     fn method_report(&self) -> Option<crate::methods::MethodReport> {
         None

@@ -113,6 +113,14 @@ impl Backend for CpuBackend {
         Ok(figures)
     }
 
+    fn warm_start(&mut self, _: &Prepared, i_ex: &Table) -> Result<()> {
+        let state = self.state.as_mut().expect("state present");
+        state.i_ex = i_ex.clone();
+        state.residuals.clear();
+        state.energies.clear();
+        Ok(())
+    }
+
     fn i_ex(&mut self) -> Result<Table> {
         Ok(self.state().i_ex.clone())
     }

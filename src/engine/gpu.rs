@@ -187,6 +187,10 @@ impl Backend for GpuBackend {
         Ok(figures)
     }
 
+    fn warm_start(&mut self, prep: &Prepared, i_ex: &Table) -> Result<()> {
+        self.solver.upload_i_ex(&prep.system, i_ex)
+    }
+
     fn i_ex(&mut self) -> Result<Table> {
         self.solver.read_i_ex()
     }

@@ -10,6 +10,7 @@ pub mod backend;
 pub mod cpu;
 pub mod drive;
 pub mod gpu;
+pub mod motion;
 pub mod options;
 pub mod prepared;
 pub mod stats;
@@ -50,6 +51,18 @@ pub struct Engine {
     setup_start: Option<Instant>,
     setup: Setup,
     method: crate::settings::Method,
+    /// The options the engine was made with (an update prepares the moved scene with them).
+    options: Options,
+    /// The scene with the moves made since the last update ([`Engine::update`]).
+    next: Option<Scene>,
+    /// Scene time last set.
+    time: f64,
+    /// Milliseconds of the last update.
+    update_ms: f64,
+    /// Whether the last update carried the solution over.
+    warm: bool,
+    /// Residual of the last iteration [`Engine::iterate`] ran.
+    last_residual: Option<f64>,
 }
 
 /// The Vulkan context `options` ask for: the host's, or a new headless one.
@@ -140,6 +153,12 @@ impl Engine {
             setup_start: Some(setup_start),
             setup,
             method: options.method,
+            options: options.clone(),
+            next: None,
+            time: 0.0,
+            update_ms: 0.0,
+            warm: false,
+            last_residual: None,
         })
     }
 
@@ -201,11 +220,20 @@ impl Engine {
         let mut done = 0;
         while done < n {
             let k = (n - done).min(drive::BATCH_LIMIT);
-            self.backend
-                .iterate_batch(&self.prep, s.scheme, s.antiradiance_steps, k)?;
+            let figures =
+                self.backend
+                    .iterate_batch(&self.prep, s.scheme, s.antiradiance_steps, k)?;
+            if let Some(f) = figures.last() {
+                self.last_residual = Some(f.change.relative);
+            }
             done += k;
         }
         Ok(())
+    }
+
+    /// The relative change of I_ex in the last iteration [`Engine::iterate`] ran.
+    pub fn last_residual(&self) -> Option<f64> {
+        self.last_residual
     }
 
     /// Draws the current state from the camera into host memory.

@@ -34,6 +34,8 @@ pub struct SolverOverrides {
     pub filter_cutoff: Option<f64>,
     /// Shadow-mapped samples of the area emitters (0: emission through the bins).
     pub emitter_samples: Option<usize>,
+    /// Iterations per animated frame (warm-started).
+    pub iterations_per_frame: Option<usize>,
 }
 
 impl SolverOverrides {
@@ -51,6 +53,7 @@ impl SolverOverrides {
         s.max_iterations = self.max_iterations.unwrap_or(s.max_iterations);
         s.filter_cutoff = self.filter_cutoff.unwrap_or(s.filter_cutoff);
         s.emitter_samples = self.emitter_samples.or(s.emitter_samples);
+        s.iterations_per_frame = self.iterations_per_frame.unwrap_or(s.iterations_per_frame);
         s
     }
 }
@@ -158,6 +161,15 @@ impl Options {
         if let Some(n) = self.solver.iterations.filter(|&n| n > MAX_ITERATIONS) {
             return bad(format!(
                 "--iterations must be 0..={MAX_ITERATIONS} (a cap against typos, not a convergence limit), got {n}"
+            ));
+        }
+        if let Some(n) = self
+            .solver
+            .iterations_per_frame
+            .filter(|n| !(1..=MAX_ITERATIONS).contains(n))
+        {
+            return bad(format!(
+                "--iterations-per-frame must be 1..={MAX_ITERATIONS}, got {n}"
             ));
         }
         if let Some(n) = self

@@ -602,6 +602,40 @@ impl GpuSolver {
         self.res.images.i_total.upload(&bytes)
     }
 
+    /// Replaces I_ex with `table` (unscaled, one row per node of `sys`, clusters as pull makes
+    /// them): a warm start from the previous frame's solution when objects moved (§3.3). Leaf
+    /// rows go to the current leaf image, cluster rows to their depth parity's image.
+    pub fn upload_i_ex(&mut self, sys: &System, table: &Table) -> Result<()> {
+        let l = *self.res.layout();
+        let zero = || Table::zeros(table.rows(), table.bins);
+        let (mut leaf, mut even, mut odd) = (zero(), zero(), zero());
+        for r in 0..table.rows() {
+            let dst = if sys.leaf_slot[r] != u32::MAX {
+                &mut leaf
+            } else if self.depth_parity[r] {
+                &mut odd
+            } else {
+                &mut even
+            };
+            for (d, v) in dst.row_mut(r).iter_mut().zip(table.row(r)) {
+                *d = *v * self.scale;
+            }
+        }
+        let p = self.parity;
+        let format = self.res.plan.format;
+        let im = &mut self.res.images;
+        im.leaf_ex_mut(p)
+            .upload(&encode(format, &l.from_table(&leaf)))?;
+        im.cluster_ex.upload(&encode(
+            super::resources::CLUSTER_FORMAT,
+            &l.from_table(&even),
+        ))?;
+        im.cluster_ex_odd.upload(&encode(
+            super::resources::CLUSTER_FORMAT,
+            &l.from_table(&odd),
+        ))
+    }
+
     /// Reads the pushed incident radiance back (push leaves odd depths' rows in the L_in image).
     pub fn read_l_push(&mut self) -> Result<Table> {
         let layout = *self.res.layout();

@@ -126,6 +126,46 @@ pub struct SceneFile {
     pub camera: Option<CameraDesc>,
     /// Discretization and iteration settings.
     pub solver: Option<SolverDesc>,
+    /// Scene time of keyframed objects and lights.
+    pub animation: Option<AnimationDesc>,
+}
+
+/// `[animation]`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AnimationDesc {
+    /// Seconds of scene time, finite and positive (default: the last key's time).
+    pub duration: Option<f64>,
+}
+
+/// One `[[object.keyframe]]`: the object's translation and/or rotation at `time`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectKeyDesc {
+    /// Scene time in seconds (finite, non-negative, increasing from key to key).
+    pub time: f64,
+    /// Replaces the object's `translate` at this time.
+    pub translate: Option<Xyz>,
+    /// Replaces the object's `rotate` at this time.
+    pub rotate: Option<RotateDesc>,
+}
+
+/// One `[[light.keyframe]]`: fields of the light at `time` (only those its type takes).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LightKeyDesc {
+    /// Scene time in seconds (finite, non-negative, increasing from key to key).
+    pub time: f64,
+    /// Point and spot: position.
+    pub position: Option<Xyz>,
+    /// Spot: a point on the axis.
+    pub target: Option<Xyz>,
+    /// Directional: direction of travel.
+    pub direction: Option<Xyz>,
+    /// Point and spot: intensity.
+    pub intensity: Option<Rgb>,
+    /// Directional: irradiance.
+    pub irradiance: Option<Rgb>,
 }
 
 /// One `[[object]]`: an OBJ file, its placement and material overrides.
@@ -147,6 +187,12 @@ pub struct ObjectDesc {
     /// Overrides of MTL materials by name.
     #[serde(default)]
     pub materials: BTreeMap<String, MaterialOverride>,
+    /// Keyframes of the object's translation and rotation (makes it moving).
+    #[serde(default)]
+    pub keyframe: Vec<ObjectKeyDesc>,
+    /// Moved by the host between frames (`Engine::set_object_transform`) without keyframes;
+    /// linked for motion anywhere in the scene's bounds.
+    pub moving: Option<bool>,
 }
 
 /// Rotation by `angle_deg` degrees about `axis` (right-handed).
@@ -198,6 +244,9 @@ pub struct LightDesc {
     pub cutoff_deg: Option<f64>,
     /// Spot: angle from the axis inside which intensity is full, in [0, cutoff_deg].
     pub beam_width_deg: Option<f64>,
+    /// Keyframes of the light's position, target, direction, intensity or irradiance.
+    #[serde(default)]
+    pub keyframe: Vec<LightKeyDesc>,
 }
 
 /// `[environment]`.
@@ -260,6 +309,9 @@ pub struct SolverDesc {
     /// Cone-filter weights below this fraction of a row's largest are dropped, in
     /// [1e-9, 0.5].
     pub filter_cutoff: Option<f64>,
+    /// Iterations per animated frame, warm-started from the previous frame,
+    /// 1..=[`super::MAX_ITERATIONS`] (default 4, the paper's).
+    pub iterations_per_frame: Option<i64>,
     /// Shadow-mapped samples of the area emitters, 0..=[`super::MAX_EMITTER_SAMPLES`] (0: their
     /// emission goes through the bins).
     pub emitter_samples: Option<i64>,

@@ -1,6 +1,7 @@
 //! Loading and validating a TOML scene and its OBJ/MTL meshes. Every error names the file and
 //! field; every number is checked against its range before any meshing or device work.
 
+use super::animation;
 use super::files::{self, FileProblem};
 use super::format::{self, LightDesc, SceneFile, Xyz};
 use super::object::{load_object, ObjectSource};
@@ -78,7 +79,12 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene> {
         scene.environment = source(env.radiance, "environment.radiance", path)?;
     }
     for (i, l) in file.light.iter().enumerate() {
-        scene.lights.push(light(l, i, path)?);
+        let lt = light(l, i, path)?;
+        let target = l.target.map_or(DVec3::ZERO, |t| DVec3::from_array(t.0));
+        scene
+            .light_tracks
+            .push(animation::light_track(&l.keyframe, i, &lt, target, path)?);
+        scene.lights.push(lt);
     }
     if file.object.is_empty() {
         return Err(scene_err(
@@ -96,8 +102,22 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene> {
             transform,
             transform_field,
         };
+        let first = scene.meshes.len();
         load_object(&mut scene, o, &src, &mut warned)?;
+        let motion =
+            animation::object_motion(o, i, transform.to_scale_rotation_translation(), path)?;
+        scene.objects.push(animation::SceneObject {
+            meshes: first..scene.meshes.len(),
+            transform,
+            moving: motion.is_some() || o.moving == Some(true),
+            motion,
+        });
     }
+    scene.duration = animation::duration(
+        file.animation.as_ref().and_then(|a| a.duration),
+        &scene,
+        path,
+    )?;
     resolve_element_size(&mut scene, given_size, path)?;
     scene.warnings = warned.into_iter().collect();
     Ok(scene)
@@ -120,7 +140,7 @@ pub(super) fn mesh_err(path: &Path, message: String) -> Error {
 }
 
 /// A position or vector: finite, components of magnitude at most [`MAX_COORDINATE`].
-fn vec3(v: Xyz, field: &str, path: &Path) -> Result<DVec3> {
+pub(super) fn vec3(v: Xyz, field: &str, path: &Path) -> Result<DVec3> {
     let v = v.0;
     if !v.iter().all(|x| x.is_finite()) {
         return Err(scene_err(
@@ -207,7 +227,7 @@ fn camera(c: &format::CameraDesc, path: &Path) -> Result<Camera> {
 }
 
 /// A direction: non-zero, normalized.
-fn unit(v: Xyz, field: &str, path: &Path) -> Result<DVec3> {
+pub(super) fn unit(v: Xyz, field: &str, path: &Path) -> Result<DVec3> {
     let d = vec3(v, field, path)?;
     if d == DVec3::ZERO {
         return Err(scene_err(path, format!("`{field}` must be non-zero")));

@@ -1,6 +1,7 @@
 //! Scenes: triangle meshes with Phong materials, analytic lights, environment, camera and solver
 //! settings. `format` is the TOML on disk, `load` turns it into a validated [`Scene`].
 
+pub mod animation;
 mod files;
 pub mod format;
 pub mod limits;
@@ -191,6 +192,9 @@ pub struct SolverSettings {
     /// ([`crate::frame::emitters::choose`]): [`crate::frame::emitters::DEFAULT_SAMPLES`] unless
     /// the emitters cover much of the scene.
     pub emitter_samples: Option<usize>,
+    /// Iterations each animated frame runs, warm-started from the previous frame's solution
+    /// (§3.3; the paper's 4 by default): 1..=[`MAX_ITERATIONS`].
+    pub iterations_per_frame: usize,
 }
 
 /// Most emitter samples (each has six shadow-map faces).
@@ -211,6 +215,7 @@ impl Default for SolverSettings {
             max_iterations: 1000,
             filter_cutoff: crate::filter::CUTOFF,
             emitter_samples: None,
+            iterations_per_frame: 4,
         }
     }
 }
@@ -234,6 +239,13 @@ pub struct Scene {
     pub solver: SolverSettings,
     /// Approximations made while loading (unsupported MTL features), one line each, no repeats.
     pub warnings: Vec<String>,
+    /// The `[[object]]`s: which meshes each placed, where, and how it moves (empty for scenes
+    /// built in code unless [`Scene::add_object`] registers some).
+    pub objects: Vec<animation::SceneObject>,
+    /// Keyframes of the lights, by index into `lights` (may be shorter: lights without).
+    pub light_tracks: Vec<animation::LightTrack>,
+    /// Seconds of scene time the animation spans (`None`: no keyframes).
+    pub duration: Option<f64>,
 }
 
 impl Scene {
@@ -256,6 +268,9 @@ impl Scene {
             },
             solver: SolverSettings::default(),
             warnings: Vec::new(),
+            objects: Vec::new(),
+            light_tracks: Vec::new(),
+            duration: None,
         }
     }
 

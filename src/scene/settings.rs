@@ -129,6 +129,14 @@ pub fn solver_settings(s: &SolverDesc, path: &Path) -> Result<SolverSettings> {
             "solver.max_iterations",
             path,
         )?,
+        iterations_per_frame: count(
+            s.iterations_per_frame,
+            d.iterations_per_frame,
+            MAX_ITERATIONS,
+            ITERATION_CAP,
+            "solver.iterations_per_frame",
+            path,
+        )?,
         emitter_samples: match s.emitter_samples {
             None => d.emitter_samples,
             Some(n) if (0..=super::MAX_EMITTER_SAMPLES as i64).contains(&n) => Some(n as usize),

@@ -1,0 +1,183 @@
+//! Moving objects and lights between frames (§3.3): [`Engine::set_time`],
+//! [`Engine::set_light`] and [`Engine::set_object_transform`] say where things stand;
+//! [`Engine::update`] makes the engine follow, and the next iterations continue from the
+//! previous frame's solution (warm start).
+//!
+//! What `update` does now is a **per-frame re-preparation**: the moved scene is discretized and
+//! linked again and the backend's tables are made anew (the shadow maps and direct light of
+//! every light, the links and form factors of everything), then the previous I_ex is carried
+//! over leaf by leaf (elements keep their index: a rigid motion subdivides a mesh the same way)
+//! and pulled into the new hierarchy. It is correct for any motion, at the price of relinking
+//! every frame; the paper's bounded link mesh (links made once for the worst case over the
+//! motion, only moving links' form factors recomputed) is not built yet (README, "Moving
+//! lights and objects").
+
+use super::backend;
+use super::prepared::Prepared;
+use super::Engine;
+use crate::error::{Error, Result};
+use crate::progress::Silent;
+use crate::scene::{Light, Scene};
+use crate::solver::Table;
+use crate::system::System;
+use ash::vk;
+use glam::DMat4;
+use std::time::Instant;
+
+impl Engine {
+    /// The scene as the next [`Engine::update`] will prepare it (moves made so far).
+    fn next_scene(&mut self) -> &mut Scene {
+        if self.next.is_none() {
+            self.next = Some(self.prep.scene.clone());
+        }
+        self.next.as_mut().expect("set above")
+    }
+
+    /// Moves every keyframed object and light to scene time `t` (seconds). Records nothing and
+    /// computes nothing: [`Engine::update`] does.
+    pub fn set_time(&mut self, t: f64) -> Result<()> {
+        if !t.is_finite() {
+            return Err(Error::Invalid(format!("time must be finite, got {t}")));
+        }
+        self.next_scene().move_to(t);
+        self.time = t;
+        Ok(())
+    }
+
+    /// The scene time last set ([`Engine::set_time`]; 0 at creation).
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Replaces analytic light `index` (a light of the scene file, in its order) for the next
+    /// [`Engine::update`]. Area emitters' samples are made by the engine and cannot be set.
+    pub fn set_light(&mut self, index: usize, light: Light) -> Result<()> {
+        let n = self.prep.scene.lights.len();
+        if index >= n {
+            return Err(Error::Invalid(format!(
+                "light {index} does not exist ({n} analytic lights)"
+            )));
+        }
+        let finite = match &light {
+            Light::Directional {
+                direction,
+                irradiance,
+            } => direction.is_normalized() && irradiance.is_finite() && irradiance.min_element() >= 0.0,
+            Light::Point {
+                position,
+                intensity,
+            } => position.is_finite() && intensity.is_finite() && intensity.min_element() >= 0.0,
+            Light::Spot {
+                position,
+                axis,
+                intensity,
+                cutoff,
+                beam_width,
+            } => {
+                position.is_finite()
+                    && axis.is_normalized()
+                    && intensity.is_finite()
+                    && intensity.min_element() >= 0.0
+                    && *cutoff > 0.0
+                    && *cutoff <= std::f64::consts::PI
+                    && (0.0..=*cutoff).contains(beam_width)
+            }
+            Light::EmitterSample { .. } => {
+                return Err(Error::Invalid(
+                    "emitter samples are made by the engine from the emitting faces; move the emitting object instead".into(),
+                ))
+            }
+        };
+        if !finite {
+            return Err(Error::Invalid(format!(
+                "light {index}: positions and intensities must be finite and non-negative, directions unit, angles 0 ≤ beam width ≤ cutoff ≤ π: {light:?}"
+            )));
+        }
+        self.next_scene().lights[index] = light;
+        Ok(())
+    }
+
+    /// Places object `object` (an `[[object]]` of the scene file, in its order, or one a host
+    /// registered with [`Scene::add_object`]) at `m` (object-to-world) for the next
+    /// [`Engine::update`]. Only objects marked moving (keyframes, `moving = true`) may move.
+    pub fn set_object_transform(&mut self, object: usize, m: DMat4) -> Result<()> {
+        self.next_scene().set_object_transform(object, m)
+    }
+
+    /// Makes the engine follow what moved since the last update (no-op when nothing did):
+    /// re-prepares the moved scene, makes the backend's tables and shadow maps anew and
+    /// carries the previous solution over as the start of the next iterations. GPU: the new
+    /// tables are uploaded here (the result image is a new one: hosts re-read
+    /// [`super::gpu::GpuBackend::frame`] after an update).
+    pub fn update(&mut self) -> Result<()> {
+        let Some(scene) = self.next.take() else {
+            return Ok(());
+        };
+        let t = Instant::now();
+        let old = self.backend.i_ex()?;
+        let ctx = self.backend.as_gpu().map(|g| g.context().clone());
+        let memory = ctx.as_ref().map(|c| c.info.device_local_bytes);
+        let mut prep = Prepared::new(&scene, &self.options, memory, &Silent)?;
+        let warm = carry_over(&self.prep.system, &prep.system, &old);
+        let mut backend = backend::create(&self.options, &mut prep, ctx)?;
+        backend.prepare_lights(&mut prep)?;
+        match &warm {
+            Some(table) => backend.warm_start(&prep, table)?,
+            None => backend.initialize(&prep)?,
+        }
+        self.backend = backend;
+        self.prep = prep;
+        self.update_ms = t.elapsed().as_secs_f64() * 1e3;
+        self.warm = warm.is_some();
+        Ok(())
+    }
+
+    /// For hosts recording into their own command buffer: performs [`Engine::update`] on the
+    /// host and records nothing into `cmd`. The update relinks and re-creates the GPU tables
+    /// (host work and uploads that finish before this returns), so there is nothing left to
+    /// record; the next [`Engine::record_iterations`] continues from the carried-over solution.
+    pub fn record_update(&mut self, cmd: vk::CommandBuffer) -> Result<()> {
+        let _ = cmd;
+        self.update()
+    }
+
+    /// Milliseconds the last [`Engine::update`] took (0 before any).
+    pub fn update_ms(&self) -> f64 {
+        self.update_ms
+    }
+
+    /// Whether the last [`Engine::update`] continued from the previous solution (false when the
+    /// elements changed and it started from the initial state).
+    pub fn warm_started(&self) -> bool {
+        self.warm
+    }
+}
+
+/// The previous solution `old` (rows of `before`'s nodes) as rows of `after`'s: each leaf's row
+/// moves to the node its element has now, clusters are pulled. `None` when the elements are
+/// not the same ones (a different subdivision), where nothing carries over.
+pub fn carry_over(before: &System, after: &System, old: &Table) -> Option<Table> {
+    let same = before.elements.len() == after.elements.len()
+        && before
+            .elements
+            .iter()
+            .zip(&after.elements)
+            .all(|(a, b)| a.mesh == b.mesh && a.triangle == b.triangle);
+    if !same || old.bins != after.bins.count {
+        return None;
+    }
+    let mut t = Table::zeros(after.rows(), old.bins);
+    for (e, (&from, &to)) in before
+        .hierarchy
+        .leaf_of_element
+        .iter()
+        .zip(&after.hierarchy.leaf_of_element)
+        .enumerate()
+    {
+        let _ = e;
+        t.row_mut(to as usize)
+            .copy_from_slice(old.row(from as usize));
+    }
+    crate::solver::pull::pull(&after.hierarchy, &mut t);
+    Some(t)
+}
