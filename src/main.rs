@@ -249,6 +249,7 @@ fn run(cli: Cli) -> Result<()> {
             frames,
             screenshot,
             resize,
+            step,
             shadow_map_size,
             device,
             plan,
@@ -268,6 +269,7 @@ fn run(cli: Cli) -> Result<()> {
                 frames,
                 screenshot,
                 resize,
+                step,
             })
             .with_context(|| name)?;
         }

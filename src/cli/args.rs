@@ -259,6 +259,10 @@ pub enum Command {
         /// swapchain follows the window; the frame is scaled to fit, keeping its aspect).
         #[arg(long, requires = "frames", value_parser = window_size)]
         resize: Option<(u32, u32)>,
+        /// With --frames: scene seconds per frame while the animation plays (the window's own
+        /// clock otherwise).
+        #[arg(long, default_value_t = 1.0 / 30.0, requires = "frames", value_parser = positive)]
+        step: f64,
         /// Shadow map side in texels.
         #[arg(long, default_value_t = 1024)]
         shadow_map_size: u32,
@@ -301,7 +305,13 @@ Mouse: left drag turns (orbit: the eye around the target; fly: the view about th
        wheel zooms (orbit) or moves forward (fly).
 Keys:  W/S forward/back, A/D left/right, Q/E down/up (eye and target together, 2% of the
        scene per press); F switches orbit/fly; R resets to the scene's camera; Esc quits.
-The title shows the frame rate and the frame's GPU pass times (ms).";
+       Space plays/pauses the animation (keyframed scenes start playing), Left/Right scrub by
+       5% of its duration, Home goes to its start; Tab selects the next analytic light,
+       J/L, I/K, U/O move it along -x/+x, -z/+z, -y/+y by 2% of the scene (a directional
+       light turns by 5°). After a change every frame runs the scene's iterations_per_frame
+       warm-started iterations until its iterations are done (always while playing).
+The title shows the frame rate, the frame's GPU pass times (ms, summed over its iterations),
+the animation time, the selected light and the last update's time.";
 
 /// Solver settings that replace the scene's.
 #[derive(Args)]

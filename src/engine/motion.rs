@@ -118,6 +118,8 @@ impl Engine {
         let ctx = self.backend.as_gpu().map(|g| g.context().clone());
         let memory = ctx.as_ref().map(|c| c.info.device_local_bytes);
         let mut prep = Prepared::new(&scene, &self.options, memory, &Silent)?;
+        // A camera a host set (Engine::set_camera) stays: the re-prepared scene has its own.
+        prep.camera = self.prep.camera.clone();
         let warm = carry_over(&self.prep.system, &prep.system, &old);
         let mut backend = backend::create(&self.options, &mut prep, ctx)?;
         backend.prepare_lights(&mut prep)?;

@@ -5,6 +5,7 @@
 //! command buffer followed by a blit of the frame image onto the swapchain image.
 
 mod camera;
+mod playback;
 mod swapchain;
 mod vulkan;
 
@@ -40,6 +41,8 @@ pub struct ViewRequest {
     pub screenshot: Option<PathBuf>,
     /// After the first frame, ask for this window size.
     pub resize: Option<(u32, u32)>,
+    /// Scene seconds per frame while playing with `frames` (the wall clock otherwise).
+    pub step: f64,
 }
 
 /// Opens the window and runs until it is closed (or `frames` were presented).
@@ -110,6 +113,14 @@ impl ApplicationHandler for App {
                 let PhysicalKey::Code(code) = event.physical_key else {
                     return;
                 };
+                let Some(engine) = v.engine.as_mut() else {
+                    return;
+                };
+                match v.playback.key(code, engine) {
+                    Ok(true) => return v.window.request_redraw(),
+                    Ok(false) => {}
+                    Err(e) => return self.fail(el, e),
+                }
                 let c = &mut v.control;
                 match code {
                     KeyCode::Escape => el.exit(),
@@ -157,7 +168,7 @@ impl ApplicationHandler for App {
                 }
                 if done {
                     el.exit();
-                } else if self.req.frames.is_some() {
+                } else if self.req.frames.is_some() || v.playback.busy() {
                     v.window.request_redraw();
                 }
             }
@@ -180,6 +191,7 @@ struct Viewer {
     /// The swapchain must be recreated before the next frame (resize, out-of-date, suboptimal).
     stale: bool,
     control: Control,
+    playback: playback::Playback,
     dragging: bool,
     cursor: Option<(f64, f64)>,
     presented: u32,
@@ -223,6 +235,10 @@ impl Viewer {
             rectangular_lines: host.rectangular_lines,
             debug_utils: host.inst.debug_utils,
         })?;
+        let diagonal = {
+            let (lo, hi) = req.scene.bounds();
+            (hi - lo).length()
+        };
         let d = host.device.clone();
         let pool = unsafe {
             d.create_command_pool(
@@ -241,10 +257,12 @@ impl Viewer {
             image_available: vk::Semaphore::null(),
             swap: None,
             stale: true,
-            control: Control::new(cam.clone(), {
-                let (lo, hi) = req.scene.bounds();
-                (hi - lo).length()
-            }),
+            control: Control::new(cam.clone(), diagonal),
+            playback: playback::Playback::new(
+                req.scene.duration(),
+                diagonal,
+                req.frames.map(|_| req.step),
+            ),
             dragging: false,
             cursor: None,
             presented: 0,
@@ -311,6 +329,10 @@ impl Viewer {
             self.swap = Some(Swapchain::new(&self.host, (size.width, size.height), old)?);
             self.stale = false;
         }
+        // Update what moved (time, lights; the engine keeps the camera), then the camera.
+        let dt = self.last.map_or(0.0, |t| t.elapsed().as_secs_f64());
+        let engine = self.engine.as_mut().ok_or_else(|| anyhow!("no engine"))?;
+        let iterations = self.playback.advance(engine, dt)?;
         if self.control.changed {
             let camera = self.control.camera.clone();
             self.engine()?.set_camera(camera)?;
@@ -355,6 +377,8 @@ impl Viewer {
             }
             let engine = self.engine()?;
             engine.gpu()?.begin(cmd);
+            // Warm-started iterations after a change (`iterations_per_frame`), then the frame.
+            engine.record_iterations(cmd, iterations)?;
             engine.record_draw(cmd)?;
             let out = &engine.gpu()?.frame().images().output;
             let src = Source {
@@ -463,10 +487,20 @@ impl Viewer {
             };
         }
         let mode = self.control.mode;
-        let gpu = self.engine()?.gpu()?;
-        let passes: Vec<String> = gpu
-            .frame()
-            .read_timings()?
+        let engine = self.engine.as_mut().ok_or_else(|| anyhow!("no engine"))?;
+        let status = self.playback.status(engine);
+        let gpu = engine.gpu()?;
+        let mut timings = gpu.solver().read_timings()?.to_vec();
+        timings.extend_from_slice(gpu.frame().read_timings()?);
+        // Summed per pass over the frame's iterations, in first-seen order.
+        let mut sums: Vec<(String, f64)> = Vec::new();
+        for (name, ms) in timings {
+            match sums.iter_mut().find(|s| s.0 == name) {
+                Some(s) => s.1 += ms,
+                None => sums.push((name, ms)),
+            }
+        }
+        let passes: Vec<String> = sums
             .iter()
             .map(|(name, ms)| format!("{name} {ms:.1}"))
             .collect();
@@ -476,8 +510,9 @@ impl Viewer {
             "– fps".into()
         };
         let passes = passes.join(", ");
+        let sep = if status.is_empty() { "" } else { " · " };
         self.window.set_title(&format!(
-            "antiradiance · {rate} · GPU ms: {passes} · {mode:?}"
+            "antiradiance · {rate} · GPU ms: {passes} · {mode:?}{sep}{status}"
         ));
         Ok(passes)
     }
