@@ -6,8 +6,8 @@
 //!     cargo run --release --example embed -- [--frames N] [--exr OUT.exr] [--png OUT.png]
 //!
 //! The validation layer is on; any validation message fails the run (exit status 1). Per frame
-//! the camera circles the room (`Engine::set_camera`): moving lights and objects between
-//! frames needs the engine's scene-update calls (issue 19), not in this API yet.
+//! the block slides and the light moves (`Engine::set_object_transform`, `Engine::set_light`,
+//! `Engine::record_update`), and the solve continues from the previous frame's solution.
 
 use antiradiance::engine::{Engine, Options};
 use antiradiance::frame::Image;
@@ -15,7 +15,7 @@ use antiradiance::gpu::{Context, HostDevice};
 use antiradiance::progress::Silent;
 use antiradiance::scene::{Light, Material, Scene};
 use ash::vk;
-use glam::{DQuat, DVec3};
+use glam::{DMat4, DQuat, DVec3};
 use gpu_allocator::vulkan::{
     Allocation, AllocationCreateDesc, AllocationScheme, Allocator, AllocatorCreateDesc,
 };
@@ -154,6 +154,11 @@ impl Drop for Host {
     }
 }
 
+/// The moving block's object index (the scene's first object).
+const BLOCK: usize = 0;
+/// Where the point light starts.
+const LIGHT: DVec3 = DVec3::new(0.2, 1.7, 0.5);
+
 /// Adds the quad `p` (counter-clockwise seen from its front) as two triangles.
 fn quad(s: &mut Scene, name: &str, p: [DVec3; 4], material: u32) {
     s.add_mesh(name, p.to_vec(), vec![[0, 1, 2], [0, 2, 3]], material);
@@ -233,11 +238,15 @@ fn scene() -> Scene {
             c(a.x, b.y, b.z),
         ],
     ];
+    let first = s.meshes.len();
     for (i, f) in faces.into_iter().enumerate() {
         quad(&mut s, &format!("block{i}"), f, grey);
     }
+    // The block is one object that moves (its links are made for that; the room does not move).
+    let block = s.add_object(first..s.meshes.len(), DMat4::IDENTITY, true);
+    assert_eq!(block, BLOCK);
     s.lights.push(Light::Point {
-        position: v(0.2, 1.7, 0.5),
+        position: LIGHT,
         intensity: DVec3::splat(3.0),
     });
     s.environment = DVec3::splat(0.02);
@@ -370,7 +379,7 @@ fn run() -> Res<()> {
     Ok(())
 }
 
-/// Per frame: move the camera, record iterations and the frame into the host's command buffer
+/// Per frame: move the block and the light, record iterations and the frame into the host's command buffer
 /// with a copy of the result into the host's buffer, submit, wait, read. Returns the last image.
 fn frames_loop(
     host: &Host,
@@ -382,26 +391,40 @@ fn frames_loop(
     frames: usize,
 ) -> Res<Image> {
     let d = &host.device;
-    let home = engine.prepared().camera.clone();
+    let per_frame = engine.prepared().settings.iterations_per_frame;
     let mut image = None;
     for frame in 0..frames {
         let t = std::time::Instant::now();
-        // 2. Change what the API lets a host change between frames: the camera circles.
-        let mut cam = home.clone();
-        let turn = DQuat::from_rotation_y(0.05 * frame as f64);
-        cam.eye = cam.target + turn * (home.eye - home.target);
-        engine.set_camera(cam)?;
-        // 3. Record: (first frame) the initial state, 4 iterations, the frame, then the
-        //    host's copy of the frame's output image.
         unsafe {
             d.reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())?;
             d.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default())?;
         }
-        engine.gpu()?.begin(cmd);
         if frame == 0 {
+            // 2a. The first frame starts from the initial state (emission, direct light).
+            engine.gpu()?.begin(cmd);
             engine.record_initialize(cmd)?;
+        } else {
+            // 2b. Later frames move the block (turning about its base) and the light from
+            //     the host's own data, and update: the next iterations continue from the
+            //     previous frame's solution. The update's work is done on the host before the
+            //     engine's commands are recorded (its GPU objects may be new: begin after it).
+            let x = 0.08 * frame as f64;
+            let place = DMat4::from_translation(DVec3::new(x, 0.0, 0.0))
+                * DMat4::from_quat(DQuat::from_rotation_y(0.2 * frame as f64));
+            engine.set_object_transform(BLOCK, place)?;
+            engine.set_light(
+                0,
+                Light::Point {
+                    position: LIGHT + DVec3::new(-0.1 * frame as f64, 0.0, -0.05 * frame as f64),
+                    intensity: DVec3::splat(3.0),
+                },
+            )?;
+            engine.record_update(cmd)?;
+            engine.gpu()?.begin(cmd);
         }
-        engine.record_iterations(cmd, 4)?;
+        // 3. Record `iterations_per_frame` iterations (4, the paper's), the frame, then the
+        //    host's copy of the frame's output image.
+        engine.record_iterations(cmd, per_frame)?;
         engine.record_draw(cmd)?;
         let out = &engine.gpu()?.frame().images().output;
         let (w, h) = (out.extent.width, out.extent.height);
@@ -452,8 +475,9 @@ fn frames_loop(
         }
         let passes: Vec<String> = sums.iter().map(|(n, ms)| format!("{n} {ms:.1}")).collect();
         println!(
-            "frame {frame}: mean radiance {mean:.4}, {:.0} ms; GPU ms: {}",
+            "frame {frame}: mean radiance {mean:.4}, {:.0} ms (update {:.0} ms); GPU ms: {}",
             t.elapsed().as_secs_f64() * 1e3,
+            if frame == 0 { 0.0 } else { engine.update_ms() },
             passes.join(", ")
         );
         image = Some(img);
