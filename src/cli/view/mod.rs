@@ -329,15 +329,6 @@ impl Viewer {
             self.swap = Some(Swapchain::new(&self.host, (size.width, size.height), old)?);
             self.stale = false;
         }
-        // Update what moved (time, lights; the engine keeps the camera), then the camera.
-        let dt = self.last.map_or(0.0, |t| t.elapsed().as_secs_f64());
-        let engine = self.engine.as_mut().ok_or_else(|| anyhow!("no engine"))?;
-        let iterations = self.playback.advance(engine, dt)?;
-        if self.control.changed {
-            let camera = self.control.camera.clone();
-            self.engine()?.set_camera(camera)?;
-            self.control.changed = false;
-        }
         let swap = self.swap.as_ref().expect("made above");
         let (swap_raw, images, extent, format) =
             (swap.raw, swap.images.clone(), swap.extent, swap.format);
@@ -355,6 +346,16 @@ impl Viewer {
             }
             Err(e) => return Err(e).context("acquiring a swapchain image"),
         };
+        // An image is ours: update what moved (time, lights; the engine keeps the camera),
+        // then take the camera.
+        let dt = self.last.map_or(0.0, |t| t.elapsed().as_secs_f64());
+        let engine = self.engine.as_mut().ok_or_else(|| anyhow!("no engine"))?;
+        let iterations = self.playback.advance(engine, dt)?;
+        if self.control.changed {
+            let camera = self.control.camera.clone();
+            self.engine()?.set_camera(camera)?;
+            self.control.changed = false;
+        }
         let last = frames.is_some_and(|n| self.presented + 1 >= n);
         let readback = match (last, shot) {
             (true, Some(_)) => Some(Readback::new(
