@@ -354,3 +354,47 @@ fn set_camera_survives_an_update() {
     engine.update().unwrap();
     assert_eq!(engine.prepared().camera, moved);
 }
+
+/// Bad input: one `Error:` line with an exact exit status, before any window or work.
+#[test]
+fn view_refuses_bad_input() {
+    let bin = env!("CARGO_BIN_EXE_antiradiance");
+    let run = |args: &[&str], display: bool| {
+        let mut c = Command::new(bin);
+        c.arg("view").args(args).env("ANTIRADIANCE_VALIDATION", "1");
+        if !display {
+            c.env_remove("DISPLAY")
+                .env_remove("WAYLAND_DISPLAY")
+                .env_remove("WAYLAND_SOCKET");
+        }
+        let o = c.output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr).into_owned();
+        let errors: Vec<String> = err
+            .lines()
+            .filter(|l| l.starts_with("Error:"))
+            .map(String::from)
+            .collect();
+        assert_eq!(errors.len(), 1, "{args:?}: {err}");
+        (o.status.code(), errors[0].clone())
+    };
+    let small = ["--bins", "32", "--width", "16", "--height", "16"];
+    let (code, e) = run(&small, false);
+    assert_eq!(code, Some(1), "{e}");
+    assert!(
+        e.contains("cannot open a window") && e.contains("xvfb-run"),
+        "{e}"
+    );
+    let (code, e) = run(&["--frames", "1", "--resize", "0x5"], true);
+    assert_eq!(code, Some(2), "{e}");
+    assert!(e.contains("--resize"), "{e}");
+    let (code, e) = run(&["--frames", "1", "--step", "-1"], true);
+    assert_eq!(code, Some(2), "{e}");
+    assert!(e.contains("--step"), "{e}");
+    let missing = std::env::temp_dir().join("antiradiance-view-no-such-dir/shot.png");
+    let (code, e) = run(
+        &["--frames", "1", "--screenshot", missing.to_str().unwrap()],
+        false,
+    );
+    assert_eq!(code, Some(1), "{e}");
+    assert!(e.contains("antiradiance-view-no-such-dir"), "{e}");
+}

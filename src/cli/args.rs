@@ -261,7 +261,7 @@ pub enum Command {
         resize: Option<(u32, u32)>,
         /// With --frames: scene seconds per frame while the animation plays (the window's own
         /// clock otherwise).
-        #[arg(long, default_value_t = 1.0 / 30.0, requires = "frames", value_parser = positive)]
+        #[arg(long, default_value_t = 1.0 / 30.0, requires = "frames", allow_negative_numbers = true, value_parser = positive)]
         step: f64,
         /// Shadow map side in texels.
         #[arg(long, default_value_t = 1024)]
