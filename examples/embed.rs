@@ -477,7 +477,11 @@ fn frames_loop(
         println!(
             "frame {frame}: mean radiance {mean:.4}, {:.0} ms (update {:.0} ms); GPU ms: {}",
             t.elapsed().as_secs_f64() * 1e3,
-            if frame == 0 { 0.0 } else { engine.update_ms() },
+            if frame == 0 {
+                0.0
+            } else {
+                engine.update_times().total_ms
+            },
             passes.join(", ")
         );
         image = Some(img);

@@ -3,6 +3,7 @@
 //! runs `iterations_per_frame` warm-started iterations and draws. `antiradiance animate`
 //! writes the frames and `frames.csv` from what this hands back.
 
+use crate::engine::motion::UpdateTimes;
 use crate::engine::{Engine, Options};
 use crate::error::{Error, Result};
 use crate::frame::Image;
@@ -66,6 +67,9 @@ pub struct FrameRecord {
     pub iterations: usize,
     /// Relative change of I_ex in the frame's last iteration.
     pub residual: f64,
+    /// The update's parts (zero for frame 0); not a CSV column.
+    #[serde(skip)]
+    pub update_parts: UpdateTimes,
 }
 
 impl FrameRecord {
@@ -119,6 +123,7 @@ pub fn animate(
         total_ms: ms(t0),
         iterations: rendered.stats.iterations,
         residual: rendered.stats.residuals.last().copied().unwrap_or(0.0),
+        update_parts: UpdateTimes::default(),
     };
     each(&first, &rendered.image)?;
     records.push(first);
@@ -150,6 +155,7 @@ pub fn animate(
             total_ms: ms(start),
             iterations: n,
             residual: engine.last_residual().unwrap_or(0.0),
+            update_parts: engine.update_times(),
         };
         each(&r, &image)?;
         records.push(r);
@@ -168,12 +174,20 @@ pub fn summary(records: &[FrameRecord]) -> String {
     let mut s = format!("{} frames in {:.1} s", records.len(), total / 1e3);
     if !rest.is_empty() {
         let frame = mean(|r| r.total_ms);
+        let iteration = mean(|r| r.solve_ms / r.iterations.max(1) as f64);
+        let update = mean(|r| r.update_ms);
         s += &format!(
-            "; animated frames {:.1} ms each ({:.2} fps): update {:.1} ms, solve {:.1} ms, draw {:.1} ms",
+            "; animated frames {:.1} ms each ({:.2} fps): update {:.1} ms (prepare and link {:.1}, tables {:.1}, shadow maps and direct light {:.1}, carry-over {:.1}; {:.1} iterations' worth), solve {:.1} ms ({:.1} ms per iteration), draw {:.1} ms",
             frame,
             1e3 / frame,
-            mean(|r| r.update_ms),
+            update,
+            mean(|r| r.update_parts.prepare_ms),
+            mean(|r| r.update_parts.backend_ms),
+            mean(|r| r.update_parts.lights_ms),
+            mean(|r| r.update_parts.carry_ms),
+            update / iteration,
             mean(|r| r.solve_ms),
+            iteration,
             mean(|r| r.draw_ms)
         );
     }

@@ -237,3 +237,107 @@ fn study_without_indirect_light_leaves_those_columns_empty_and_says_why() {
         assert!(cols[15].parse::<f64>().unwrap().is_finite(), "{line}");
     }
 }
+
+/// A floor and a small plate above it moving on keyframes, under a moving point light.
+fn moving_scene(dir: &Path) -> PathBuf {
+    let quad = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bad-input/quad.obj");
+    let text = format!(
+        r#"[camera]
+eye = [0.5, 1.5, 1.5]
+target = [0.5, 0.0, -0.5]
+width = 16
+height = 16
+[solver]
+bins = 32
+element_size = 0.25
+[[light]]
+type = "point"
+position = [0.5, 1.0, -0.5]
+intensity = 1.0
+[[light.keyframe]]
+time = 0.2
+position = [0.3, 1.0, -0.3]
+[[object]]
+mesh = "{q}"
+rotate = {{ axis = [1, 0, 0], angle_deg = -90 }}
+[[object]]
+mesh = "{q}"
+scale = 0.3
+rotate = {{ axis = [1, 0, 0], angle_deg = -90 }}
+translate = [0.3, 0.5, -0.3]
+[[object.keyframe]]
+time = 0.2
+translate = [0.4, 0.5, -0.4]
+"#,
+        q = quad.display()
+    );
+    let p = dir.join("moving.toml");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+fn animate_writes_frames_csv_and_a_summary() {
+    let d = scratch("animate");
+    let s = moving_scene(&d);
+    let out = d.join("frames");
+    let o = bin()
+        .args([
+            "animate",
+            s.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .args(["--fps", "10", "--exr", "--backend", "cpu"])
+        .output()
+        .unwrap();
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(0), "{e}");
+    // Duration 0.2 s (the last key) × 10 fps: 2 frames.
+    let csv = std::fs::read_to_string(out.join("frames.csv")).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(
+        lines[0],
+        "frame,time,update_ms,solve_ms,draw_ms,total_ms,iterations,residual"
+    );
+    assert_eq!(lines.len(), 3, "{csv}");
+    assert!(lines[2].starts_with("1,0.1,"), "{csv}");
+    for k in 0..2 {
+        for ext in ["png", "exr"] {
+            let f = out.join(format!("frame-{k:04}.{ext}"));
+            assert!(f.is_file(), "{} missing", f.display());
+        }
+    }
+    let a = Image::read_exr(&out.join("frame-0000.exr")).unwrap();
+    let b = Image::read_exr(&out.join("frame-0001.exr")).unwrap();
+    assert!(a.is_finite() && b.is_finite());
+    assert_ne!(a.pixels, b.pixels, "the plate and the light moved");
+    assert!(e.contains("fps"), "no frame-rate summary: {e}");
+}
+
+#[test]
+fn animate_flags_are_checked() {
+    let d = scratch("animate-flags");
+    let s = moving_scene(&d);
+    let (s, out) = (s.to_str().unwrap(), d.join("o"));
+    let out = out.to_str().unwrap();
+    refused(&["animate", s, "--out", out, "--fps", "0"], 2, &["--fps"]);
+    refused(&["animate", s, "--out", out, "--fps", "nan"], 2, &["--fps"]);
+    refused(
+        &["animate", s, "--out", out, "--frames", "0"],
+        2,
+        &["--frames"],
+    );
+    refused(
+        &["animate", s, "--out", out, "--iterations-per-frame", "0"],
+        2,
+        &["--iterations-per-frame"],
+    );
+    let still = scene();
+    refused(
+        &["animate", still.to_str().unwrap(), "--out", out],
+        1,
+        &["--frames"],
+    );
+    refused(&["render", s, "--time", "nan"], 2, &["--time"]);
+}

@@ -126,8 +126,8 @@ fn gpu_frames_match_render_at_their_time() {
     common::assert_clean(o.context.as_ref().unwrap());
 }
 
-/// A static scene: setting a time and updating changes nothing — the same links, the same
-/// solution carried over exactly, the same frame.
+/// A static scene: setting a time and updating changes nothing — not relinked, the same links,
+/// the same solution carried over exactly, the same frame.
 #[test]
 fn static_scene_is_unchanged_by_an_update() {
     let scene = bundled("cornell-box.toml");
@@ -138,7 +138,7 @@ fn static_scene_is_unchanged_by_an_update() {
     let i_ex = engine.i_ex().unwrap();
     engine.set_time(1.0).unwrap();
     engine.update().unwrap();
-    assert!(engine.warm_started());
+    assert!(engine.warm_started() && !engine.relinked());
     assert_eq!(engine.prepared().system.links.links, links);
     assert_eq!(engine.i_ex().unwrap(), i_ex);
     // Converged: four more iterations move the frame by rounding only.
@@ -171,8 +171,12 @@ fn host_moves_lights_and_refuses_fixed_objects() {
         .to_string();
     assert!(e.contains("not marked moving"), "{e}");
     assert!(engine.set_light(5, moved.clone()).is_err());
+    let links = engine.prepared().system.links.links.clone();
     engine.set_light(0, moved.clone()).unwrap();
     engine.update().unwrap();
+    // Only a light moved: the links are kept, not remade.
+    assert!(!engine.relinked() && engine.warm_started());
+    assert_eq!(engine.prepared().system.links.links, links);
     engine.iterate(4).unwrap();
     let frame = engine.draw().unwrap();
     let mut there = scene.clone();

@@ -57,10 +57,12 @@ pub struct Engine {
     next: Option<Scene>,
     /// Scene time last set.
     time: f64,
-    /// Milliseconds of the last update.
-    update_ms: f64,
+    /// Parts of the last update.
+    update_times: motion::UpdateTimes,
     /// Whether the last update carried the solution over.
     warm: bool,
+    /// Whether the last update linked again.
+    relinked: bool,
     /// Residual of the last iteration [`Engine::iterate`] ran.
     last_residual: Option<f64>,
 }
@@ -156,8 +158,9 @@ impl Engine {
             options: options.clone(),
             next: None,
             time: 0.0,
-            update_ms: 0.0,
+            update_times: motion::UpdateTimes::default(),
             warm: false,
+            relinked: false,
             last_residual: None,
         })
     }

@@ -3,8 +3,9 @@
 //! [`Engine::update`] makes the engine follow, and the next iterations continue from the
 //! previous frame's solution (warm start).
 //!
-//! What `update` does now is a **per-frame re-preparation**: the moved scene is discretized and
-//! linked again and the backend's tables are made anew (the shadow maps and direct light of
+//! Where only lights moved, `update` keeps the elements and links and makes the lights, plan,
+//! shadow maps and backend anew. Where objects moved it is a **per-frame re-preparation**: the
+//! moved scene is discretized and linked again and the backend's tables are made anew (the shadow maps and direct light of
 //! every light, the links and form factors of everything), then the previous I_ex is carried
 //! over leaf by leaf (elements keep their index: a rigid motion subdivides a mesh the same way)
 //! and pulled into the new hierarchy. It is correct for any motion, at the price of relinking
@@ -110,26 +111,58 @@ impl Engine {
     /// tables are uploaded here (the result image is a new one: hosts re-read
     /// [`super::gpu::GpuBackend::frame`] after an update).
     pub fn update(&mut self) -> Result<()> {
+        if self.method != crate::settings::Method::Antiradiance {
+            return Err(Error::Invalid(format!(
+                "moving objects and lights need the antiradiance method, not {}",
+                self.method
+            )));
+        }
         let Some(scene) = self.next.take() else {
             return Ok(());
         };
+        let ms = |t: Instant| t.elapsed().as_secs_f64() * 1e3;
         let t = Instant::now();
         let old = self.backend.i_ex()?;
         let ctx = self.backend.as_gpu().map(|g| g.context().clone());
         let memory = ctx.as_ref().map(|c| c.info.device_local_bytes);
-        let mut prep = Prepared::new(&scene, &self.options, memory, &Silent)?;
+        // Only lights moved: the elements and links stay (no relinking), the solution carries
+        // over row for row.
+        let still = scene
+            .meshes
+            .iter()
+            .zip(&self.prep.scene.meshes)
+            .all(|(a, b)| a.positions == b.positions);
+        let (mut prep, warm) = if still {
+            (self.prep.relit(&scene, &self.options)?, Some(old))
+        } else {
+            let prep = Prepared::new(&scene, &self.options, memory, &Silent)?;
+            let warm = carry_over(&self.prep.system, &prep.system, &old);
+            (prep, warm)
+        };
+        self.relinked = !still;
+        let prepare_ms = ms(t);
+        let t1 = Instant::now();
         // A camera a host set (Engine::set_camera) stays: the re-prepared scene has its own.
         prep.camera = self.prep.camera.clone();
-        let warm = carry_over(&self.prep.system, &prep.system, &old);
         let mut backend = backend::create(&self.options, &mut prep, ctx)?;
+        let backend_ms = ms(t1);
+        let t2 = Instant::now();
         backend.prepare_lights(&mut prep)?;
+        let lights_ms = ms(t2);
+        let t3 = Instant::now();
         match &warm {
             Some(table) => backend.warm_start(&prep, table)?,
             None => backend.initialize(&prep)?,
         }
         self.backend = backend;
         self.prep = prep;
-        self.update_ms = t.elapsed().as_secs_f64() * 1e3;
+        self.update_times = UpdateTimes {
+            prepare_ms,
+            backend_ms,
+            lights_ms,
+            carry_ms: ms(t3),
+            total_ms: ms(t),
+        };
         self.warm = warm.is_some();
         Ok(())
     }
@@ -143,9 +176,15 @@ impl Engine {
         self.update()
     }
 
-    /// Milliseconds the last [`Engine::update`] took (0 before any).
-    pub fn update_ms(&self) -> f64 {
-        self.update_ms
+    /// How long the last [`Engine::update`] took, by part (zero before any).
+    pub fn update_times(&self) -> UpdateTimes {
+        self.update_times
+    }
+
+    /// Whether the last [`Engine::update`] discretized and linked the scene again (objects
+    /// moved); false where only lights moved and the links were kept.
+    pub fn relinked(&self) -> bool {
+        self.relinked
     }
 
     /// Whether the last [`Engine::update`] continued from the previous solution (false when the
@@ -153,6 +192,23 @@ impl Engine {
     pub fn warm_started(&self) -> bool {
         self.warm
     }
+}
+
+/// The parts of one [`Engine::update`], milliseconds.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct UpdateTimes {
+    /// Discretizing and linking the moved scene, planning, and mapping the old solution
+    /// onto it (includes reading I_ex back from the GPU).
+    pub prepare_ms: f64,
+    /// Creating the backend's tables, link buffers and frame (GPU: allocations, uploads,
+    /// pipelines from the cache).
+    pub backend_ms: f64,
+    /// Shadow maps of every light and the leaves' direct light.
+    pub lights_ms: f64,
+    /// Handing the carried-over solution to the backend (GPU: its upload).
+    pub carry_ms: f64,
+    /// The whole update.
+    pub total_ms: f64,
 }
 
 /// The previous solution `old` (rows of `before`'s nodes) as rows of `after`'s: each leaf's row

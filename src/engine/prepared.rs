@@ -79,6 +79,35 @@ impl Prepared {
         progress.end();
         let system = system?;
         let surfaces = Surfaces::new(scene, &system);
+        Self::lit(scene, options, settings, camera, target, system, surfaces)
+    }
+
+    /// This prepared scene with `scene`'s lights, where only lights changed (its geometry is
+    /// this one's): the system, links and surfaces are kept, the lights, plan and shadow-map
+    /// views made anew.
+    pub fn relit(&self, scene: &Scene, options: &Options) -> Result<Self> {
+        Self::lit(
+            scene,
+            options,
+            self.settings.clone(),
+            self.camera.clone(),
+            self.target.clone(),
+            self.system.clone(),
+            self.surfaces.clone(),
+        )
+    }
+
+    /// The lights (analytic and emitter samples), the plan and the shadow-map views of a
+    /// discretized scene.
+    fn lit(
+        scene: &Scene,
+        options: &Options,
+        settings: SolverSettings,
+        camera: Camera,
+        target: Option<TargetChoice>,
+        system: System,
+        surfaces: Surfaces,
+    ) -> Result<Self> {
         // The analytic lights, then the area emitters' samples (§3.3).
         let mut lights = scene.lights.clone();
         let emitter_choice = if options.method.samples_emitters() {

@@ -178,8 +178,10 @@ impl Playback {
                 l.kind()
             ));
         }
-        if engine.update_ms() > 0.0 {
-            parts.push(format!("update {:.0} ms", engine.update_ms()));
+        let update = engine.update_times().total_ms;
+        if update > 0.0 {
+            let relinked = if engine.relinked() { ", relinked" } else { "" };
+            parts.push(format!("update {update:.0} ms{relinked}"));
         }
         parts.join(" · ")
     }
