@@ -1,8 +1,9 @@
 //! `antiradiance view`: a window on the engine (GPU backend) through winit and ash-window. The
 //! viewer is an embedding host like any other: it makes its own instance (with the window
 //! system's surface extensions) and device (with a swapchain), hands them to the library
-//! (`Context::from_host`), solves once, and per frame records the engine's draw into its own
-//! command buffer followed by a blit of the frame image onto the swapchain image.
+//! (`Context::from_host`), solves as `render` does, and per frame updates what moved
+//! (`playback`), records the engine's iterations and draw into its own command buffer, then a
+//! blit of the frame image onto the swapchain image.
 
 mod camera;
 mod playback;
