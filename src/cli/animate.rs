@@ -38,14 +38,17 @@ pub struct AnimateArgs {
 /// Renders the frames of `scene` into `a.out`, then writes `frames.csv` and prints the rate.
 pub fn run(scene: &Scene, a: AnimateArgs, name: &str) -> Result<()> {
     let sampling = Sampling::of(scene, a.frames.map(|n| n as usize), a.fps)?;
-    let mut o = Options::default();
-    o.solver = a.solver.overrides();
-    o.solver.iterations_per_frame = a.iterations_per_frame.map(|n| n as usize);
-    o.width = a.size.width;
-    o.height = a.size.height;
-    o.backend = a.backend;
-    o.shadow_map_size = a.shadow_map_size;
-    o.device = a.device;
+    let mut solver = a.solver.overrides();
+    solver.iterations_per_frame = a.iterations_per_frame.map(|n| n as usize);
+    let o = Options {
+        solver,
+        width: a.size.width,
+        height: a.size.height,
+        backend: a.backend,
+        shadow_map_size: a.shadow_map_size,
+        device: a.device,
+        ..Options::default()
+    };
     o.resolve(scene)?;
     std::fs::create_dir_all(&a.out).with_context(|| format!("{}", a.out.display()))?;
     let csv = a.out.join("frames.csv");

@@ -1,6 +1,7 @@
 //! The engine: one long-lived object that owns a prepared scene and one backend, and that every
 //! command, the tests and an embedding host drive the same way. A frame is: update what moved
-//! ([`Engine::new`] prepares the lights; moving scenes will update them between frames), iterate
+//! ([`Engine::new`] prepares the lights; between frames [`Engine::set_time`],
+//! [`Engine::set_light`], [`Engine::set_object_transform`] then [`Engine::update`], `motion.rs`), iterate
 //! ([`Engine::initialize`], [`Engine::iterate`], or [`Engine::render`] with the convergence
 //! monitor and its fallbacks), draw ([`Engine::draw`]). A host that owns the Vulkan device records
 //! the same steps into its own command buffers ([`Engine::record_initialize`],

@@ -225,14 +225,12 @@ pub fn carry_over(before: &System, after: &System, old: &Table) -> Option<Table>
         return None;
     }
     let mut t = Table::zeros(after.rows(), old.bins);
-    for (e, (&from, &to)) in before
+    for (&from, &to) in before
         .hierarchy
         .leaf_of_element
         .iter()
         .zip(&after.hierarchy.leaf_of_element)
-        .enumerate()
     {
-        let _ = e;
         t.row_mut(to as usize)
             .copy_from_slice(old.row(from as usize));
     }

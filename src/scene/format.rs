@@ -190,8 +190,8 @@ pub struct ObjectDesc {
     /// Keyframes of the object's translation and rotation (makes it moving).
     #[serde(default)]
     pub keyframe: Vec<ObjectKeyDesc>,
-    /// Moved by the host between frames (`Engine::set_object_transform`) without keyframes;
-    /// linked for motion anywhere in the scene's bounds.
+    /// Moved by the host between frames (`Engine::set_object_transform`) without keyframes
+    /// (keyframes imply it; `false` with keyframes is refused).
     pub moving: Option<bool>,
 }
 
