@@ -186,3 +186,65 @@ impl Playback {
         parts.join(" · ")
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use antiradiance::engine::Options;
+    use antiradiance::progress::Silent;
+    use antiradiance::scene::{Material, Scene};
+    use antiradiance::BackendKind;
+
+    /// A floor under a point light, on the CPU backend (no device needed).
+    fn engine() -> Engine {
+        let mut s = Scene::empty();
+        let m = s.add_material(Material::diffuse("grey", 0.5));
+        let v = DVec3::new;
+        let floor = vec![
+            v(-1., 0., 1.),
+            v(1., 0., 1.),
+            v(1., 0., -1.),
+            v(-1., 0., -1.),
+        ];
+        s.add_mesh("floor", floor, vec![[0, 1, 2], [0, 2, 3]], m);
+        s.lights.push(Light::Point {
+            position: v(0.0, 1.0, 0.0),
+            intensity: DVec3::ONE,
+        });
+        s.camera.width = 8;
+        s.camera.height = 8;
+        s.solver.bins = 32;
+        s.solver.element_size = 0.5;
+        s.solver.iterations = 8;
+        s.solver.iterations_per_frame = 4;
+        let options = Options {
+            backend: BackendKind::Cpu,
+            ..Default::default()
+        };
+        Engine::new(&s, &options, &Silent).unwrap()
+    }
+
+    #[test]
+    fn light_keys_move_the_light_and_the_next_frames_iterate() {
+        let mut e = engine();
+        // The floor's diagonal is 2√2: a step is 2% of it.
+        let mut p = Playback::new(0.0, 8f64.sqrt(), None);
+        assert!(!p.playing, "nothing to play without keyframes");
+        assert!(!p.key(KeyCode::Space, &mut e).unwrap());
+        assert!(p.key(KeyCode::KeyL, &mut e).unwrap());
+        assert!(p.key(KeyCode::KeyL, &mut e).unwrap());
+        assert!(p.key(KeyCode::KeyO, &mut e).unwrap());
+        assert_eq!(p.advance(&mut e, 0.0).unwrap(), 4, "iterations_per_frame");
+        let Light::Point { position, .. } = e.prepared().scene.lights[0] else {
+            panic!("not a point light");
+        };
+        let step = 0.02 * 8f64.sqrt();
+        let want = DVec3::new(2.0 * step, 1.0 + step, 0.0);
+        assert!((position - want).length() < 1e-12, "{position:?}");
+        assert!(!e.relinked(), "a light move keeps the links");
+        // The scene's 8 iterations at 4 per frame: one more frame iterates, then none.
+        assert_eq!(p.advance(&mut e, 0.0).unwrap(), 4);
+        assert_eq!(p.advance(&mut e, 0.0).unwrap(), 0);
+        assert!(!p.busy());
+    }
+}
