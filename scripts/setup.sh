@@ -3,7 +3,8 @@
 # Vulkan (lavapipe, loader, validation layers) for the GPU passes; glslc compiles the shaders at build time.
 set -euo pipefail
 pkgs=(mesa-vulkan-drivers libvulkan1 libvulkan-dev vulkan-validationlayers vulkan-tools
-      glslc spirv-tools pkg-config)
+      glslc spirv-tools pkg-config
+      xvfb xauth libx11-6 libxcursor1 libxrandr2 libxi6 libxkbcommon-x11-0)
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg -s "$p" >/dev/null 2>&1 || missing+=("$p")

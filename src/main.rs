@@ -244,6 +244,37 @@ fn run(cli: Cli) -> Result<()> {
             print!("{}", report.text());
             write_json(&json, &report)?;
         }
+        Command::View {
+            scene,
+            solver,
+            size,
+            frames,
+            screenshot,
+            resize,
+            step,
+            shadow_map_size,
+            device,
+            plan,
+        } => {
+            check_outputs([screenshot.as_ref()])?;
+            let s = load(scene)?;
+            let mut o = plan.options();
+            o.solver = solver.overrides();
+            o.width = size.width;
+            o.height = size.height;
+            o.shadow_map_size = shadow_map_size;
+            o.device = device;
+            let name = scene_name(&s);
+            cli::view::run(cli::view::ViewRequest {
+                scene: s,
+                options: o,
+                frames,
+                screenshot,
+                resize,
+                step,
+            })
+            .with_context(|| name)?;
+        }
         Command::Info { scene, json, plan } => {
             let s = load(scene)?;
             let o = plan.options();

@@ -23,6 +23,18 @@ fn positive(s: &str) -> Result<f64, String> {
     }
 }
 
+/// A window size `WxH`, each side 1..=16384.
+fn window_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X', '×'])
+        .ok_or_else(|| format!("expected WxH, got `{s}`"))?;
+    let side = |v: &str| match v.trim().parse::<u32>() {
+        Ok(n) if (1..=16384).contains(&n) => Ok(n),
+        _ => Err(format!("each side must be 1..=16384, got `{v}`")),
+    };
+    Ok((side(w)?, side(h)?))
+}
+
 /// `antiradiance`: global illumination with implicit visibility and antiradiance.
 #[derive(Parser)]
 #[command(
@@ -232,6 +244,39 @@ pub enum Command {
         #[arg(long)]
         diff: Option<PathBuf>,
     },
+    /// Open a window on the scene (GPU backend): solve, then draw from a camera you move.
+    #[command(after_help = VIEW_BINDINGS)]
+    View {
+        /// Scene TOML (default: the bundled Cornell box).
+        scene: Option<PathBuf>,
+        #[command(flatten)]
+        solver: SolverArgs,
+        /// Window and frame size (default: the scene camera's `width` × `height`).
+        #[command(flatten)]
+        size: SizeArgs,
+        /// Present this many frames, then exit.
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
+        frames: Option<u32>,
+        /// With --frames: save the last presented image (PNG, window size) here.
+        #[arg(long, requires = "frames")]
+        screenshot: Option<PathBuf>,
+        /// With --frames: resize the window to W×H (e.g. `192x160`) after the first frame (the
+        /// swapchain follows the window; the frame is scaled to fit, keeping its aspect).
+        #[arg(long, requires = "frames", value_parser = window_size)]
+        resize: Option<(u32, u32)>,
+        /// With --frames: scene seconds per frame while the animation plays (the window's own
+        /// clock otherwise).
+        #[arg(long, default_value_t = 1.0 / 30.0, requires = "frames", allow_negative_numbers = true, value_parser = positive)]
+        step: f64,
+        /// Shadow map side in texels.
+        #[arg(long, default_value_t = 1024)]
+        shadow_map_size: u32,
+        /// Vulkan device whose name contains this (default: prefer a discrete GPU).
+        #[arg(long)]
+        device: Option<String>,
+        #[command(flatten)]
+        plan: PlanArgs,
+    },
     /// Time the GPU passes (global, push, local, pull) per frame, like the paper's Table 2.
     Profile {
         /// Scene TOML (default: the bundled Cornell box).
@@ -258,6 +303,20 @@ pub enum Command {
         plan: PlanArgs,
     },
 }
+
+/// `view`'s key and mouse bindings, shown after its options in `--help`.
+const VIEW_BINDINGS: &str = "\
+Mouse: left drag turns (orbit: the eye around the target; fly: the view about the eye);
+       wheel zooms (orbit) or moves forward (fly).
+Keys:  W/S forward/back, A/D left/right, Q/E down/up (eye and target together, 2% of the
+       scene per press); F switches orbit/fly; R resets to the scene's camera; Esc quits.
+       Space plays/pauses the animation (keyframed scenes start playing), Left/Right scrub by
+       5% of its duration, Home goes to its start; Tab selects the next analytic light,
+       J/L, I/K, U/O move it along -x/+x, -z/+z, -y/+y by 2% of the scene (a directional
+       light turns by 5°). After a change every frame runs the scene's iterations_per_frame
+       warm-started iterations until its iterations are done (always while playing).
+The title shows the frame rate, the frame's GPU pass times (ms, summed over its iterations),
+the animation time, the selected light and the last update's time.";
 
 /// Solver settings that replace the scene's.
 #[derive(Args)]

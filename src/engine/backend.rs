@@ -44,6 +44,9 @@ pub trait Backend {
     fn widen(&mut self, prep: &Prepared) -> Result<Option<String>>;
     /// Draws the frame of the current state from `prep.camera`.
     fn draw(&mut self, prep: &Prepared) -> Result<Image>;
+    /// Takes `prep.camera` (same size, new pose or field of view) for the next frames; the
+    /// solution does not depend on the camera, so nothing is re-solved.
+    fn set_camera(&mut self, prep: &Prepared) -> Result<()>;
     /// Pass timings (ms, in order) since the last call.
     fn take_timings(&mut self) -> Vec<(String, f64)>;
     /// Precision of the tables now.

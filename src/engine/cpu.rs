@@ -153,6 +153,11 @@ impl Backend for CpuBackend {
         Ok(image)
     }
 
+    fn set_camera(&mut self, _: &Prepared) -> Result<()> {
+        // The ray-cast frame reads `prep.camera` at every draw.
+        Ok(())
+    }
+
     fn take_timings(&mut self) -> Vec<(String, f64)> {
         std::mem::take(&mut self.timings)
     }

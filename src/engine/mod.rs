@@ -28,7 +28,7 @@ use crate::gpu::memory::MemoryReport;
 use crate::gpu::work::Work;
 use crate::gpu::{Context, ContextOptions};
 use crate::progress::Progress;
-use crate::scene::{Precision, Scene};
+use crate::scene::{Camera, Precision, Scene};
 use crate::settings::BackendKind;
 use crate::solver::Table;
 use ash::vk;
@@ -243,6 +243,36 @@ impl Engine {
     /// Draws the current state from the camera into host memory.
     pub fn draw(&mut self) -> Result<Image> {
         self.backend.draw(&self.prep)
+    }
+
+    /// Draws the next frames from `camera` (a pose, target or field of view; the image size
+    /// is fixed when the engine is made). The solution is view-independent: nothing is
+    /// re-solved, the next [`Engine::draw`] / [`Engine::record_draw`] uses the camera.
+    pub fn set_camera(&mut self, camera: Camera) -> Result<()> {
+        let old = &self.prep.camera;
+        if (camera.width, camera.height) != (old.width, old.height) {
+            return Err(Error::Invalid(format!(
+                "camera: the image is {}×{} pixels; set_camera must keep that size (got {}×{})",
+                old.width, old.height, camera.width, camera.height
+            )));
+        }
+        let forward = camera.target - camera.eye;
+        let finite = [camera.eye, camera.target, camera.up]
+            .iter()
+            .all(|v| v.is_finite());
+        if !finite
+            || forward.length() <= 0.0
+            || forward.cross(camera.up).length() <= 1e-12 * forward.length() * camera.up.length()
+            || !(camera.fov_y_deg > 0.0 && camera.fov_y_deg < 180.0)
+        {
+            return Err(Error::Invalid(format!(
+                "camera: eye, target and up must be finite, eye ≠ target, up not along the view, \
+                 0 < fov_y_deg < 180 (got eye {:?}, target {:?}, up {:?}, fov {})",
+                camera.eye, camera.target, camera.up, camera.fov_y_deg
+            )));
+        }
+        self.prep.camera = camera;
+        self.backend.set_camera(&self.prep)
     }
 
     /// The current I_ex (unscaled).

@@ -142,6 +142,8 @@ impl Engine {
         self.relinked = !still;
         let prepare_ms = ms(t);
         let t1 = Instant::now();
+        // A camera a host set (Engine::set_camera) stays: the re-prepared scene has its own.
+        prep.camera = self.prep.camera.clone();
         let mut backend = backend::create(&self.options, &mut prep, ctx)?;
         let backend_ms = ms(t1);
         let t2 = Instant::now();

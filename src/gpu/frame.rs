@@ -423,6 +423,32 @@ impl GpuFrame {
         })
     }
 
+    /// Draws the next frames from `camera` (its size must be the one the images were made
+    /// for: they are not reallocated); `lights` is the number of lights the frame shades.
+    pub fn set_camera(
+        &mut self,
+        scene: &Scene,
+        lights: usize,
+        camera: &Camera,
+        sys: &System,
+    ) -> Result<()> {
+        let out = &self.images.output.extent;
+        if (camera.width, camera.height) != (out.width, out.height) {
+            return Err(crate::error::Error::Invalid(format!(
+                "camera: the frame is {}×{} pixels; a new camera must keep that size (got {}×{})",
+                out.width, out.height, camera.width, camera.height
+            )));
+        }
+        self.constants = constants(scene, lights, camera, sys);
+        Ok(())
+    }
+
+    /// Reads the frame's timestamps of a host-submitted command buffer (after it completed).
+    pub fn read_timings(&mut self) -> Result<&[(String, f64)]> {
+        self.timings = self.profiler.results(&self.ctx)?;
+        Ok(&self.timings)
+    }
+
     /// How long creating the frame's resources and pipelines took.
     pub fn setup_times(&self) -> super::solver::SetupTimes {
         self.setup

@@ -128,6 +128,9 @@ impl Backend for HierarchicalBackend {
     fn draw(&mut self, prep: &Prepared) -> Result<Image> {
         self.inner.draw(prep)
     }
+    fn set_camera(&mut self, prep: &Prepared) -> Result<()> {
+        self.inner.set_camera(prep)
+    }
     fn take_timings(&mut self) -> Vec<(String, f64)> {
         self.inner.take_timings()
     }

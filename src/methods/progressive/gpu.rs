@@ -222,6 +222,11 @@ impl Backend for GpuShooting {
         Ok(image)
     }
 
+    fn set_camera(&mut self, prep: &Prepared) -> Result<()> {
+        self.frame
+            .set_camera(&prep.scene, prep.lights.len(), &prep.camera, &prep.system)
+    }
+
     fn take_timings(&mut self) -> Vec<(String, f64)> {
         std::mem::take(&mut self.pending)
     }
