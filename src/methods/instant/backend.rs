@@ -120,6 +120,10 @@ impl Backend for CpuInstant {
         self.timings.push(("frame".into(), ms(t)));
         Ok(image)
     }
+    fn set_camera(&mut self, _: &Prepared) -> Result<()> {
+        // The ray-cast frame reads `prep.camera` at every draw.
+        Ok(())
+    }
     fn take_timings(&mut self) -> Vec<(String, f64)> {
         std::mem::take(&mut self.timings)
     }
@@ -235,6 +239,11 @@ impl Backend for GpuInstant {
         let image = self.frame.render(&mut self.display)?;
         self.pending.extend(self.frame.timings().iter().cloned());
         Ok(image)
+    }
+    fn set_camera(&mut self, prep: &Prepared) -> Result<()> {
+        // The VPLs are lights of `prep`, so its light count includes them.
+        self.frame
+            .set_camera(&prep.scene, prep.lights.len(), &prep.camera, &prep.system)
     }
     fn take_timings(&mut self) -> Vec<(String, f64)> {
         std::mem::take(&mut self.pending)
