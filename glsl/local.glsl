@@ -101,7 +101,8 @@ void ar_local() {
             tot = base * r_t;
             vec3 ke = AR_EMISSION ? mat.ke.rgb * pc.environment.a : vec3(0.0);
             // Light arriving at the back in bin j is blocked: antiradiance out the front.
-            vec3 blocked = AR_ANTIRADIANCE ? ar_lt(row, j, odd) : vec3(0.0);
+            // Not on a closed solid's surface (src/solids.rs): attr_leaf z is 2 where it blocks.
+            vec3 blocked = AR_ANTIRADIANCE && lf.z > 1.5 ? ar_lt(row, j, odd) : vec3(0.0);
             ex = base * (r_t + r_d + ke - blocked);
         }
     } else if (cj < 0.0) {

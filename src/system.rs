@@ -27,6 +27,8 @@ pub struct LeafAttributes {
     pub cos_norm: f64,
     /// Material index.
     pub material: u32,
+    /// Whether light arriving at its back is blocked ([`Element::blocks_back`]).
+    pub blocks_back: bool,
 }
 
 /// Everything built on the CPU before solving.
@@ -169,6 +171,7 @@ impl System {
                     normal: e.normal,
                     cos_norm: bins.cosine_normalization(e.normal),
                     material: e.material,
+                    blocks_back: e.blocks_back,
                 }
             })
             .collect();
@@ -331,7 +334,11 @@ fn transport_radius(sys: &System, antiradiance: bool) -> Option<f64> {
                 let k = l.area * l.cos_norm;
                 row[j] = if cj[j] > 0.0 {
                     // Light arriving at the back is blocked (the local pass's front bins).
-                    let blocked = if antiradiance && !uniform { lp[j] } else { 0.0 };
+                    let blocked = if antiradiance && !uniform && l.blocks_back {
+                        lp[j]
+                    } else {
+                        0.0
+                    };
                     k * cj[j] * (e / std::f64::consts::PI - blocked)
                 } else if cj[j] < 0.0 && antiradiance && !uniform {
                     k * cj[j] * lp[j]

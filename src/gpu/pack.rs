@@ -79,7 +79,9 @@ pub fn attributes(sys: &System, layout: &TableLayout) -> (Vec<[f32; 4]>, Vec<[f3
         let n = leaf.normal;
         na[i] = [n.x as f32, n.y as f32, n.z as f32, leaf.area as f32];
         let odd = sys.hierarchy.nodes[leaf.node as usize].depth % 2;
-        lf[i] = [leaf.cos_norm as f32, leaf.material as f32, 1.0, odd as f32];
+        // z: a leaf (non-zero); 2 where light arriving at its back is blocked.
+        let z = if leaf.blocks_back { 2.0 } else { 1.0 };
+        lf[i] = [leaf.cos_norm as f32, leaf.material as f32, z, odd as f32];
     }
     (na, lf)
 }

@@ -1,8 +1,8 @@
 //! Local pass at the leaves: reflection (eq. 18) into front bins, antiradiance (eq. 19) into
 //! back bins, and the display intensity `I_total`. A surface is opaque from both sides: light
 //! arriving at a leaf's back is not reflected but blocked, so it becomes antiradiance leaving
-//! the front, `I_ex = I_L − a·c·cos·L_t` in a front bin (for solid objects it is near zero: the
-//! object's own near surface already cancelled it).
+//! the front, `I_ex = I_L − a·c·cos·L_t` in a front bin. Not on a closed solid's surface
+//! ([`crate::solids`]): light inside a solid was already cancelled by its near face.
 
 use super::{CpuSolver, LocalMode};
 use crate::brdf::{lobe_shape, mirror};
@@ -84,7 +84,11 @@ pub fn local(s: &mut CpuSolver<'_>, mode: LocalMode) {
                     }
                     tot[j] = base * r_t;
                     // Light arriving at the back in bin j is blocked: antiradiance out the front.
-                    let blocked = if antiradiance { lt(j) } else { DVec3::ZERO };
+                    let blocked = if antiradiance && leaf.blocks_back {
+                        lt(j)
+                    } else {
+                        DVec3::ZERO
+                    };
                     ex[j] = base * (r_t + r_d + ke - blocked);
                 } else if cj < 0.0 {
                     if mode == LocalMode::Reflect {
