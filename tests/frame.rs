@@ -141,10 +141,12 @@ fn report(name: &str, a: &Image, b: &Image) -> f64 {
 fn gpu_and_cpu_frames_agree() {
     let mut s = lit_scene();
     let cpu = run(&s, Backend::Cpu, 256);
-    // Measured (lavapipe), relative MSE: 3.15e-5 in float32 and in float16 tables accumulated in
+    // Measured (lavapipe), relative MSE: 3.38e-5 in float32 and in float16 tables accumulated in
     // float32, 3.88e-5 with float16 accumulation (truncating). Residuals relative to the CPU's:
-    // 1.4e-7 (float32), 1.1e-4 (float16 tables), 1.6e-2 (float16 accumulation); the float32 bound
-    // allows another device's float32 arithmetic.
+    // 1.9e-7 (float32), 5.1e-4 (float16 tables; 1.1e-4 before front bins also carried the
+    // blocked light arriving at a leaf's back, more float16-rounded terms in ‖ΔI_ex‖), 1.6e-2
+    // (float16 accumulation, before that change); the float32 bound allows another device's
+    // float32 arithmetic.
     for p in [Precision::F32, Precision::F16] {
         s.solver.precision = p;
         let gpu = run(&s, Backend::Gpu, 256);
@@ -162,7 +164,7 @@ fn gpu_and_cpu_frames_agree() {
         println!("lit scene {p:?}: residuals within {worst:.2e} of the CPU's");
         let limit = match p {
             Precision::F32 => 1e-5,
-            _ => gpu_bound(&gpu, 3.2e-4, 5e-2),
+            _ => gpu_bound(&gpu, 1.5e-3, 5e-2),
         };
         assert!(
             worst < limit,
