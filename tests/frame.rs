@@ -143,7 +143,7 @@ fn gpu_and_cpu_frames_agree() {
     let cpu = run(&s, Backend::Cpu, 256);
     // Measured (lavapipe), relative MSE: 3.38e-5 in float32 and in float16 tables accumulated in
     // float32, 3.88e-5 with float16 accumulation (truncating). Residuals relative to the CPU's:
-    // 1.9e-7 (float32), 5.1e-4 (float16 tables; 1.1e-4 before front bins also carried the
+    // 1.9e-7 (float32), 5.6e-4 (float16 tables; 1.1e-4 before front bins also carried the
     // blocked light arriving at a leaf's back, more float16-rounded terms in ‖ΔI_ex‖), 1.6e-2
     // (float16 accumulation, before that change); the float32 bound allows another device's
     // float32 arithmetic.

@@ -302,8 +302,9 @@ fn open_topped_corridors_lit_only_after_reflection() {
 }
 
 /// The bundled default scene at its own settings (128 bins, elements 0.25, τ = 1, 8
-/// iterations), 32×32. Measured: relative RMSE 0.097 (CPU) / 0.098 (GPU), mean +0.1% / −0.0%,
-/// indirect light 0.111, the 214 indirect-only pixels 6.9% off at the median; GPU vs CPU
+/// iterations), 32×32. Measured: relative RMSE 0.098 (CPU) / 0.098 (GPU), mean −0.2% / −0.4%,
+/// indirect light 0.112, the 214 indirect-only pixels 6.5% off at the median (with surfaces
+/// opaque from both sides; before 0.097, +0.1%, 0.111, 6.9%); GPU vs CPU
 /// 2.4e-2 (raster against ray cast at the blocks' edges). Without antiradiance: 0.291, mean
 /// +18%, indirect light 0.585, median 38%. (With the lamp's light through the bins and cluster
 /// links uncalibrated, before issue 17: 0.300, median 19.9%.) The reference at 2048 spp keeps
