@@ -174,7 +174,7 @@ impl Ctx<'_> {
             };
             // A closed solid's face does not block from behind: it needs no light from there.
             let back = back && re.blocks_back;
-            sides = front as u8 * FRONT | back as u8 * BACK;
+            sides = (front as u8 * FRONT) | (back as u8 * BACK);
             if sides == 0 {
                 return Step::Done(None);
             }
