@@ -1,6 +1,7 @@
 // Local pass at the leaves (eqs. 18-19): the diffuse fast path (AR_GLOSSY false) and the general
 // Phong pass are specializations of this one shader (glsl/local.frag). Mirrors src/solver/local.rs: front bins get I_L = a c cos (kd/pi E + glossy + Ke),
-// back bins get -a c |cos| L_t (antiradiance), I_total gets the reflected part without emission
+// back bins get -a c |cos| L_t (antiradiance), front bins also lose a c cos L_t (light arriving at
+// the back is blocked, not reflected: opaque from both sides), I_total gets the reflected part without emission
 // and without the first bounce of direct light. The frozen hemisphere of the asymmetric steps is
 // copied from the current I_ex (ping-pong).
 #ifndef ANTIRADIANCE_LOCAL_GLSL
@@ -99,7 +100,10 @@ void ar_local() {
             }
             tot = base * r_t;
             vec3 ke = AR_EMISSION ? mat.ke.rgb * pc.environment.a : vec3(0.0);
-            ex = base * (r_t + r_d + ke);
+            // Light arriving at the back in bin j is blocked: antiradiance out the front.
+            // Not on a closed solid's surface (src/solids.rs): attr_leaf z is 2 where it blocks.
+            vec3 blocked = AR_ANTIRADIANCE && lf.z > 1.5 ? ar_lt(row, j, odd) : vec3(0.0);
+            ex = base * (r_t + r_d + ke - blocked);
         }
     } else if (cj < 0.0) {
         if (AR_MODE == AR_MODE_REFLECT) {

@@ -1,8 +1,8 @@
 #version 450
 // Push at an even depth (top-down, one draw per depth): L_push(node) = L_in(node) + the parent's
 // pushed value, which odd depths keep in the L_in image (glsl/push_odd.frag). Written into the
-// L_push image.
-#include "common.glsl"
+// L_push image. At a leaf the parent's value is added on its front only (push.glsl).
+#include "push.glsl"
 
 layout(binding = AR_BINDING_L_IN) uniform sampler2D l_in;
 layout(location = 0) flat in uint row;
@@ -12,7 +12,7 @@ layout(location = 0) out vec4 pushed;
 void main() {
     uint j = ar_bin_at(ivec2(gl_FragCoord.xy));
     vec3 v = texelFetch(l_in, ar_texel(row, j), 0).rgb;
-    if (other != 0xffffffffu) {
+    if (other != 0xffffffffu && ar_pushes(row, j)) {
         v += texelFetch(l_in, ar_texel(other, j), 0).rgb;
     }
     pushed = vec4(v, 0.0);

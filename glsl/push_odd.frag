@@ -1,7 +1,8 @@
 #version 450
 // Push at an odd depth: the parent's pushed value (even depth, in the L_push image) added to the
-// node's own row of the L_in image by additive blending, which then holds L_push(node).
-#include "common.glsl"
+// node's own row of the L_in image by additive blending, which then holds L_push(node). At a leaf
+// only on its front (push.glsl).
+#include "push.glsl"
 
 layout(binding = AR_BINDING_L_PUSH) uniform sampler2D l_push;
 layout(location = 0) flat in uint row;
@@ -10,5 +11,6 @@ layout(location = 0) out vec4 pushed;
 
 void main() {
     uint j = ar_bin_at(ivec2(gl_FragCoord.xy));
-    pushed = vec4(texelFetch(l_push, ar_texel(other, j), 0).rgb, 0.0);
+    bool add = ar_pushes(row, j);
+    pushed = add ? vec4(texelFetch(l_push, ar_texel(other, j), 0).rgb, 0.0) : vec4(0.0);
 }

@@ -22,6 +22,9 @@ pub struct Element {
     pub mesh: u32,
     /// Triangle of that mesh the element came from.
     pub triangle: u32,
+    /// Whether light arriving at its back is blocked: false on the surface of a closed solid
+    /// seen from outside ([`crate::solids`]).
+    pub blocks_back: bool,
 }
 
 impl Element {
@@ -37,6 +40,7 @@ impl Element {
             material,
             mesh,
             triangle,
+            blocks_back: true,
         }
     }
 }
@@ -169,10 +173,13 @@ pub fn build_elements(scene: &Scene, settings: &SolverSettings) -> Result<Vec<El
         }
     }
     let mut elements = Vec::with_capacity(count);
+    let solid = crate::solids::solid_triangles(scene);
     for (mi, m) in scene.meshes.iter().enumerate() {
         for (ti, tri) in m.triangles.iter().enumerate() {
             bisect(tri.map(|v| m.positions[v as usize]), size, |p| {
-                elements.push(Element::new(p, m.material[ti], mi as u32, ti as u32));
+                let mut e = Element::new(p, m.material[ti], mi as u32, ti as u32);
+                e.blocks_back = !solid[mi][ti];
+                elements.push(e);
                 true
             })?;
         }

@@ -29,6 +29,7 @@ pub mod raycast;
 pub mod reference;
 pub mod scene;
 pub mod settings;
+pub mod solids;
 pub mod solver;
 pub mod study;
 pub mod system;

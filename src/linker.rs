@@ -1,5 +1,6 @@
 //! Link construction (§3.2): hierarchical refinement from the root self-link, with the
-//! solid-angle oracle, the solid-object hemisphere rules of Fig. 7, and the form factor of eq. 17,
+//! solid-angle oracle, the hemisphere rules (a leaf receives from both sides: it reflects what
+//! reaches its front and blocks what reaches either), and the form factor of eq. 17,
 //! then calibrated so that every link carries the energy it should
 //! ([`calibrate_form_factors`]). No visibility is computed: links are unoccluded transport U.
 
@@ -33,7 +34,16 @@ pub struct Link {
     pub form_factor: f64,
     /// Cone class of the sender's solid angle (0: within one bin, no spreading).
     pub cone: u8,
+    /// Which sides of a leaf receiver the link's light arrives at ([`FRONT`], [`BACK`] or both;
+    /// clusters receive both): the global pass spreads it only into those bins, so the blur of a
+    /// link from the front does not leak into back bins, where it would be blocked.
+    pub sides: u8,
 }
+
+/// [`Link::sides`]: light arrives at the receiver's front (reflected and blocked).
+pub const FRONT: u8 = 1;
+/// [`Link::sides`]: light arrives at the receiver's back (blocked only: opaque from both sides).
+pub const BACK: u8 = 2;
 
 /// The link set, sorted by receiver, with a per-receiver index for gathering.
 #[derive(Debug, Clone, Default)]
@@ -80,6 +90,15 @@ pub fn partly_in_front(receiver: &Element, corners: &[DVec3; 3]) -> bool {
     corners.iter().any(|&c| in_front(receiver, c))
 }
 
+/// True when some part of the triangle `corners` lies strictly behind the plane of the leaf
+/// `receiver` (its light arrives at the receiver's back, to be blocked).
+pub fn partly_behind(receiver: &Element, corners: &[DVec3; 3]) -> bool {
+    corners.iter().any(|&c| {
+        let d = c - receiver.center;
+        receiver.normal.dot(d) < -1e-7 * d.length()
+    })
+}
+
 /// Relative width of a tie in the refinement tests: far above f64 rounding, far below any real
 /// difference between two configurations.
 const TIE: f64 = 1e-9;
@@ -104,6 +123,23 @@ impl Ctx<'_> {
         self.h.element(n).map(|e| &self.els[e as usize])
     }
 
+    /// Whether some triangle below the cluster `s` lies partly in front of the leaf `re`'s
+    /// plane, and whether some lies partly behind it (stops once both are found).
+    fn sides_of_cluster(&self, re: &Element, s: u32) -> (bool, bool) {
+        let (mut front, mut back) = (false, false);
+        for k in s..self.h.nodes[s as usize].end {
+            if let Some(e) = self.h.element(k) {
+                let c = &self.els[e as usize].corners;
+                front |= partly_in_front(re, c);
+                back |= partly_behind(re, c);
+                if front && back {
+                    break;
+                }
+            }
+        }
+        (front, back)
+    }
+
     /// One refinement decision for the pair (receiver `r`, sender `s`).
     fn step(&self, r: u32, s: u32) -> Step {
         let (nr, ns) = (&self.h.nodes[r as usize], &self.h.nodes[s as usize]);
@@ -114,16 +150,32 @@ impl Ctx<'_> {
                 Some([a, b]) => Step::Split(vec![(a, a), (a, b), (b, a), (b, b)]),
             };
         }
-        // Fig. 7: a leaf receives only from its front side.
+        // A leaf reflects what arrives at its front and blocks what arrives at either side
+        // (opaque from both sides); a sender in its plane exchanges nothing with it.
+        let mut sides = FRONT | BACK;
         if let Some(re) = self.leaf(r) {
-            let behind = match self.leaf(s) {
-                Some(se) => !partly_in_front(re, &se.corners),
+            let (front, back) = match self.leaf(s) {
+                Some(se) => (
+                    partly_in_front(re, &se.corners),
+                    partly_behind(re, &se.corners),
+                ),
                 None => {
                     let h = re.normal.dot(ns.center - re.center);
-                    h + ns.radius <= TIE * (h.abs() + ns.radius)
+                    let tie = TIE * (h.abs() + ns.radius);
+                    let (front, back) = (h + ns.radius > tie, h - ns.radius < -tie);
+                    if front && back {
+                        // The bounding sphere straddles the plane: ask the cluster's triangles
+                        // (an adjacent wall's cluster touches the plane but has nothing behind).
+                        self.sides_of_cluster(re, s)
+                    } else {
+                        (front, back)
+                    }
                 }
             };
-            if behind {
+            // A closed solid's face does not block from behind: it needs no light from there.
+            let back = back && re.blocks_back;
+            sides = (front as u8 * FRONT) | (back as u8 * BACK);
+            if sides == 0 {
                 return Step::Done(None);
             }
         }
@@ -146,10 +198,10 @@ impl Ctx<'_> {
                 sc.unwrap().iter().map(|&c| (r, c)).collect()
             });
         }
-        Step::Done(Some(self.link(r, s, d)))
+        Step::Done(Some(self.link(r, s, d, sides)))
     }
 
-    fn link(&self, r: u32, s: u32, d: f64) -> Link {
+    fn link(&self, r: u32, s: u32, d: f64, sides: u8) -> Link {
         let (nr, ns) = (&self.h.nodes[r as usize], &self.h.nodes[s as usize]);
         let rho2 = (ns.area / PI).min(ns.radius * ns.radius);
         let dir = (nr.center - ns.center) / d;
@@ -162,6 +214,7 @@ impl Ctx<'_> {
             receiver_bin: bin,
             form_factor: 1.0 / ((d * d).max(rho2) * self.bins.omega),
             cone: filter::cone_class(self.bins, cone_solid_angle),
+            sides,
         }
     }
 
@@ -369,19 +422,28 @@ pub fn calibrate_form_factors(
                     true_sent += e.area * e.normal.dot(v).abs() / (d2 * d2.sqrt());
                 }
             }
+            // A leaf receiver linked only to its back is calibrated for its back, as a front.
+            let flip = if l.sides == BACK { -1.0 } else { 1.0 };
             let mut true_received = 0.0;
             for e in leaves_below(l.receiver).map(|k| &els[k as usize]) {
                 let v = e.center - ns.center;
                 let d2 = v.length_squared();
                 if d2 > 0.0 {
-                    true_received += e.area * (-e.normal.dot(v)).max(0.0) / (d2 * d2.sqrt());
+                    true_received += e.area * (-flip * e.normal.dot(v)).max(0.0) / (d2 * d2.sqrt());
                 }
             }
             let g = &profiles[l.receiver as usize * m..(l.receiver as usize + 1) * m];
+            let g_at = |j: usize| match h.element(l.receiver) {
+                Some(e) if flip < 0.0 => {
+                    let e = e as usize;
+                    els[e].area * cos_norm[e] * els[e].normal.dot(bins.centers[j]).max(0.0)
+                }
+                _ => g[j],
+            };
             let received: f64 = filters
                 .row(l.cone, l.receiver_bin as u32)
                 .map_or(0.0, |row| {
-                    row.iter().map(|&(j, w)| w as f64 * g[j as usize]).sum()
+                    row.iter().map(|&(j, w)| w as f64 * g_at(j as usize)).sum()
                 });
             if sent > 0.0 && received > 0.0 {
                 let d2 = (nr.center - ns.center).length_squared();
@@ -390,14 +452,20 @@ pub fn calibrate_form_factors(
             return;
         };
         let (r, s) = (&els[re as usize], &els[se as usize]);
-        let cr = |w: DVec3| (-r.normal.dot(w)).max(0.0);
+        // A sender wholly behind the receiver delivers to its back: calibrated as to a front.
+        let rn = if l.sides & FRONT == 0 {
+            -r.normal
+        } else {
+            r.normal
+        };
+        let cr = |w: DVec3| (-rn.dot(w)).max(0.0);
         let dir = (r.center - s.center).normalize();
         let side = s.normal.dot(dir).signum();
         // A bin is usable when its center leaves the sender on the same side as the true
-        // direction and arrives at the receiver's front; near-grazing pairs may need a neighbour.
+        // direction and arrives at the receiver's side; near-grazing pairs may need a neighbour.
         let usable = |b: usize| {
             let w = bins.centers[b];
-            s.normal.dot(w) * side >= MIN_BIN_COS && -r.normal.dot(w) >= MIN_BIN_COS
+            s.normal.dot(w) * side >= MIN_BIN_COS && -rn.dot(w) >= MIN_BIN_COS
         };
         let mut b = l.sender_bin as usize;
         if !usable(b) {
@@ -419,7 +487,7 @@ pub fn calibrate_form_factors(
         if spread <= 0.0 {
             return;
         }
-        let phi = projected_solid_angle(r.center, r.normal, &s.corners);
+        let phi = projected_solid_angle(r.center, rn, &s.corners);
         let delivered = bins.omega
             * cos_norm[re as usize]
             * s.area

@@ -7,7 +7,7 @@ use crate::elements::{build_elements, Element};
 use crate::error::{Error, Result};
 use crate::filter::FilterTables;
 use crate::hierarchy::Hierarchy;
-use crate::linker::{build_links, Links};
+use crate::linker::{self, build_links, Link, Links};
 use crate::plan::occlusion::{self, Occlusion};
 use crate::scene::{Material, Scene, SolverSettings};
 use glam::DVec3;
@@ -27,6 +27,8 @@ pub struct LeafAttributes {
     pub cos_norm: f64,
     /// Material index.
     pub material: u32,
+    /// Whether light arriving at its back is blocked ([`Element::blocks_back`]).
+    pub blocks_back: bool,
 }
 
 /// Everything built on the CPU before solving.
@@ -169,6 +171,7 @@ impl System {
                     normal: e.normal,
                     cos_norm: bins.cosine_normalization(e.normal),
                     material: e.material,
+                    blocks_back: e.blocks_back,
                 }
             })
             .collect();
@@ -237,12 +240,30 @@ impl System {
         (k != u32::MAX).then(|| &self.lobe_norm[k as usize * m..(k as usize + 1) * m])
     }
 
-    /// Whether the local pass of `node` reads its incident radiance in `bin`: a leaf reads only
-    /// light arriving at its front (travel direction against its normal), for reflection and
-    /// for the antiradiance it sends on; clusters pass everything down. The global pass skips
-    /// what no one reads. Bins within [`READ_MARGIN`] of the leaf's plane are kept, so that a
-    /// float32 shader and this f64 test never disagree about a bin the local pass uses.
-    pub fn reads(&self, node: u32, bin: usize) -> bool {
+    /// Whether the local pass reads link `l`'s light in `bin`: a leaf reads light arriving at
+    /// the sides the link reaches ([`Link::sides`]; the front for reflection and antiradiance
+    /// out the back, the back for antiradiance out the front); clusters pass everything down.
+    /// The global pass skips the rest of the link's spread. Bins within [`READ_MARGIN`] of the
+    /// leaf's plane count as both sides, so that a float32 shader and this f64 test never
+    /// disagree about a bin the local pass uses.
+    pub fn reads(&self, l: &Link, bin: usize) -> bool {
+        match self.leaf_slot[l.receiver as usize] {
+            u32::MAX => true,
+            slot => {
+                let c = self.bins.centers[bin].dot(self.leaves[slot as usize].normal);
+                (l.sides & linker::FRONT != 0 && c < READ_MARGIN)
+                    || (l.sides & linker::BACK != 0 && c > -READ_MARGIN)
+            }
+        }
+    }
+
+    /// Whether the push adds the parent's incident radiance to `node` in `bin`: everywhere for a
+    /// cluster; for a leaf only on its front (bins arriving at it within [`READ_MARGIN`]). A
+    /// cluster's incident light is meant for the leaves that face its sender; at the back of the
+    /// others it would be blocked where it does not arrive (in a closed box under an environment
+    /// that took 0.5% of the light per bounce and put the worst pixel 2.5% off, against 0.98%).
+    /// Light arriving at a leaf's back is blocked when it comes through the leaf's own links.
+    pub fn pushes(&self, node: u32, bin: usize) -> bool {
         match self.leaf_slot[node as usize] {
             u32::MAX => true,
             slot => self.bins.centers[bin].dot(self.leaves[slot as usize].normal) < READ_MARGIN,
@@ -292,7 +313,7 @@ fn transport_radius(sys: &System, antiradiance: bool) -> Option<f64> {
             })
             .sum()
     };
-    // Local pass (white Lambertian): front bins a·c·cos·E/π, back bins −a·c·|cos|·L.
+    // Local pass (white Lambertian): front bins a·c·cos·(E/π − L), back bins −a·c·|cos|·L.
     let local = |i_ex: &mut [f64], l_push: &[f64], uniform: bool| {
         for (l, cj) in sys.leaves.iter().zip(&cos) {
             let r = l.node as usize;
@@ -312,7 +333,13 @@ fn transport_radius(sys: &System, antiradiance: bool) -> Option<f64> {
             for j in 0..m {
                 let k = l.area * l.cos_norm;
                 row[j] = if cj[j] > 0.0 {
-                    k * cj[j] * e / std::f64::consts::PI
+                    // Light arriving at the back is blocked (the local pass's front bins).
+                    let blocked = if antiradiance && !uniform && l.blocks_back {
+                        lp[j]
+                    } else {
+                        0.0
+                    };
+                    k * cj[j] * (e / std::f64::consts::PI - blocked)
                 } else if cj[j] < 0.0 && antiradiance && !uniform {
                     k * cj[j] * lp[j]
                 } else {
@@ -339,7 +366,9 @@ fn transport_radius(sys: &System, antiradiance: bool) -> Option<f64> {
                 let v = i_ex[l.sender as usize * m + l.sender_bin as usize] * l.form_factor;
                 if let Some(spread) = sys.filters.row(l.cone, l.receiver_bin as u32) {
                     for &(j, w) in spread {
-                        row[j as usize] += v * w as f64;
+                        if sys.reads(l, j as usize) {
+                            row[j as usize] += v * w as f64;
+                        }
                     }
                 }
             }
@@ -350,9 +379,11 @@ fn transport_radius(sys: &System, antiradiance: bool) -> Option<f64> {
             dst.copy_from_slice(&l_in[i * m..(i + 1) * m]);
             if node.parent != u32::MAX {
                 let p = node.parent as usize;
-                dst.iter_mut()
-                    .zip(&head[p * m..(p + 1) * m])
-                    .for_each(|(d, s)| *d += s);
+                for (j, (d, s)) in dst.iter_mut().zip(&head[p * m..(p + 1) * m]).enumerate() {
+                    if sys.pushes(i as u32, j) {
+                        *d += s;
+                    }
+                }
             }
         }
         local(&mut i_ex, &l_push, false);

@@ -171,7 +171,7 @@ fn cluster_links_deliver_the_closed_hemisphere() {
         sub.links.offsets = offsets;
         let (mut l_in, mut l_push) = (Table::zeros(n, m), Table::zeros(n, m));
         global::global(&sub, &field, &mut l_in);
-        push::push(h, &l_in, &mut l_push);
+        push::push(&sub, &l_in, &mut l_push);
         irradiances(&sub, &l_push)
     };
     let weighted = |e: &[f64]| {

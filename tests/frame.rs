@@ -141,10 +141,11 @@ fn report(name: &str, a: &Image, b: &Image) -> f64 {
 fn gpu_and_cpu_frames_agree() {
     let mut s = lit_scene();
     let cpu = run(&s, Backend::Cpu, 256);
-    // Measured (lavapipe), relative MSE: 3.36e-5 in float32 and in float16 tables accumulated in
+    // Measured (lavapipe), relative MSE: 3.4e-5 in float32 and in float16 tables accumulated in
     // float32, 3.88e-5 with float16 accumulation (truncating). Residuals relative to the CPU's:
-    // 9.0e-8 (float32), 6.1e-4 (float16 tables: about float16's half ulp, 4.9e-4; 1.1e-4 before
-    // the shadow offset moved toward the light), 1.6e-2 (float16 accumulation); the float32
+    // about 2e-7 (float32), 5.6e-4 … 6.1e-4 (float16 tables: about float16's half ulp, 4.9e-4;
+    // 1.1e-4 before the shadow offset moved toward the light and front bins also carried the
+    // blocked light arriving at a leaf's back), 1.6e-2 (float16 accumulation); the float32
     // bound allows another device's float32 arithmetic.
     for p in [Precision::F32, Precision::F16] {
         s.solver.precision = p;
@@ -163,7 +164,7 @@ fn gpu_and_cpu_frames_agree() {
         println!("lit scene {p:?}: residuals within {worst:.2e} of the CPU's");
         let limit = match p {
             Precision::F32 => 1e-5,
-            _ => gpu_bound(&gpu, 1.2e-3, 5e-2),
+            _ => gpu_bound(&gpu, 1.5e-3, 5e-2),
         };
         assert!(
             worst < limit,

@@ -182,9 +182,11 @@ fn symmetric_and_asymmetric_schemes_agree_on_the_cornell_box() {
     );
 }
 
-/// Light arriving from behind a leaf is neither reflected nor turned into antiradiance.
+/// Light arriving from behind a leaf is not reflected, but blocked (opaque from both sides):
+/// its front bins carry exactly `−a·c·cos·L` of the light arriving there at its back, its back
+/// bins nothing (no light arrives at its front), and its irradiance and `I_total` are zero.
 #[test]
-fn local_pass_ignores_light_from_behind() {
+fn local_pass_blocks_but_does_not_reflect_light_from_behind() {
     let v = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
     let mut s = Scene::empty();
     let e = s.add_material(Material {
@@ -218,18 +220,36 @@ fn local_pass_ignores_light_from_behind() {
     });
     solver.initialize();
     solver.propagate(antiradiance::solver::LocalMode::Both);
+    let mut blocked = 0.0;
     for (li, leaf) in sys.leaves.iter().enumerate() {
         if leaf.material != r {
             continue;
         }
-        assert!(
-            solver
-                .i_ex
-                .row(leaf.node as usize)
-                .iter()
-                .all(|x| *x == DVec3::ZERO),
-            "leaf {li} reacted to light from behind"
+        let (ex, lp) = (
+            solver.i_ex.row(leaf.node as usize),
+            solver.l_push.row(leaf.node as usize),
         );
+        for (j, c) in sys.bins.centers.iter().enumerate() {
+            let cj = c.dot(leaf.normal);
+            let want = if cj > 0.0 {
+                -(leaf.area * leaf.cos_norm * cj) * lp[j]
+            } else {
+                DVec3::ZERO
+            };
+            assert!(
+                (ex[j] - want).abs().max_element() <= 1e-12 * want.abs().max_element(),
+                "leaf {li} bin {j}: {:?}, want {want:?}",
+                ex[j]
+            );
+            blocked += -want.x;
+        }
+        assert!(solver
+            .i_total
+            .row(leaf.node as usize)
+            .iter()
+            .all(|x| *x == DVec3::ZERO));
         assert_eq!(solver.irradiance(li), DVec3::ZERO);
     }
+    println!("antiradiance out of the receiver's front: {blocked:.4e}");
+    assert!(blocked > 0.0, "no light from behind was blocked");
 }

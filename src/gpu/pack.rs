@@ -79,7 +79,9 @@ pub fn attributes(sys: &System, layout: &TableLayout) -> (Vec<[f32; 4]>, Vec<[f3
         let n = leaf.normal;
         na[i] = [n.x as f32, n.y as f32, n.z as f32, leaf.area as f32];
         let odd = sys.hierarchy.nodes[leaf.node as usize].depth % 2;
-        lf[i] = [leaf.cos_norm as f32, leaf.material as f32, 1.0, odd as f32];
+        // z: a leaf (non-zero); 2 where light arriving at its back is blocked.
+        let z = if leaf.blocks_back { 2.0 } else { 1.0 };
+        lf[i] = [leaf.cos_norm as f32, leaf.material as f32, z, odd as f32];
     }
     (na, lf)
 }
@@ -428,8 +430,11 @@ mod tests {
         let layout = TableLayout::with_column_height(sys.rows() as u32, 32, 16384, 3).unwrap();
         let (na, lf) = attributes(&sys, &layout);
         assert_eq!(na.len(), (layout.columns * layout.rows_per_column) as usize);
-        let rows_with_leaf = lf.iter().filter(|t| t[2] == 1.0).count();
+        // 1 marks a leaf row, 2 a leaf that blocks light from behind (a lone plane does).
+        let rows_with_leaf = lf.iter().filter(|t| t[2] == 1.0 || t[2] == 2.0).count();
         assert_eq!(rows_with_leaf, sys.leaves.len());
+        assert!(sys.leaves.iter().all(|l| l.blocks_back));
+        assert_eq!(lf.iter().filter(|t| t[2] == 2.0).count(), sys.leaves.len());
         for leaf in &sys.leaves {
             let (x, y) = layout.row_texel(leaf.node);
             let t = na[(y * layout.columns + x) as usize];

@@ -328,17 +328,17 @@ impl DrawData {
         let mut combo_of: HashMap<(u16, u16, Vec<(u32, u32)>), u32> = HashMap::new();
         let (mut combos, mut runs) = (Vec::new(), Vec::new());
         let (mut fragments, mut lines) = (0u64, 0u64);
-        // Every link's combo and run count (links into the same receiver share its mask, and
-        // usually their (bin, class) too, so the runs of a receiver are cached per (bin, class)).
+        // Every link's combo and run count (links into the same receiver from the same side share
+        // its mask, and usually their (bin, class) too, so runs are cached per (bin, class, sides)).
         let mut per_link: Vec<(u32, u32)> = Vec::with_capacity(sys.links.links.len());
-        let mut cache: HashMap<(u16, u8), (u32, u32)> = HashMap::new();
+        let mut cache: HashMap<(u16, u8, u8), (u32, u32)> = HashMap::new();
         let mut cache_row = u32::MAX;
         for l in &sys.links.links {
             if l.receiver != cache_row {
                 cache.clear();
                 cache_row = l.receiver;
             }
-            let key = (l.receiver_bin, l.cone);
+            let key = (l.receiver_bin, l.cone, l.sides);
             let entry = if let Some(e) = cache.get(&key) {
                 *e
             } else {
@@ -346,7 +346,7 @@ impl DrawData {
                     .filters
                     .row(l.cone, l.receiver_bin as u32)
                     .expect("table of a used cone class");
-                let r = bin_runs(layout, row, |j| sys.reads(l.receiver, j as usize));
+                let r = bin_runs(layout, row, |j| sys.reads(l, j as usize));
                 let layer = class_layer[l.cone as usize];
                 let count = r.len() as u32;
                 if count > MAX_RUNS {

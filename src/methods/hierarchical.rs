@@ -31,6 +31,12 @@ pub fn prepare(prep: &mut Prepared, settings: &MethodSettings) -> Result<MethodR
                 .into(),
         ));
     }
+    // Links reaching only a leaf's back carry light to be blocked, which antiradiance off
+    // never uses: drop them before tracing their visibility.
+    prep.system
+        .links
+        .links
+        .retain(|l| l.sides != crate::linker::BACK);
     let caster = RayCaster::new(&prep.system);
     let n = settings.rays_per_link;
     let (vis, stats) = link_visibility(&prep.system, &caster, n);

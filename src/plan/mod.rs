@@ -124,11 +124,13 @@ impl Plan {
             .unwrap_or_else(|| occlusion::analyze(scene));
         let antiradiance = match occ {
             Occlusion::Impossible => {
-                d.push("antiradiance off: no surface lies behind another that faces it, so nothing can occlude (U = G)".to_string());
+                d.push("antiradiance off: no surface has light arriving at one side and a surface on the other, so nothing can occlude (U = G)".to_string());
                 false
             }
             Occlusion::Possible(a, b) => {
-                d.push(format!("antiradiance on: '{b}' can be occluded by '{a}'"));
+                d.push(format!(
+                    "antiradiance on: '{b}' can be occluded by '{a}' (opaque from both sides)"
+                ));
                 true
             }
             Occlusion::Undecided => {

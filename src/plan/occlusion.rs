@@ -1,8 +1,10 @@
 //! Can anything in the scene occlude anything? Antiradiance (eq. 12) is the light a surface x
-//! receives on its front that unoccluded transport U would carry on through it; it reaches a
-//! surface y only when y lies (partly) behind x's plane and x lies (partly) in front of y's
-//! plane (y receives only on its front, Fig. 7). When no pair of input triangles is placed that
-//! way — one convex enclosure seen from inside, one convex solid seen from outside, a floor under
+//! receives on either side that unoccluded transport U would carry on through it (surfaces are
+//! opaque from both sides); it reaches a surface y on the other side of x's plane. Without an
+//! environment, x can occlude only when some triangle lies (partly) in front of its plane and some
+//! (partly) behind it; under an environment, which reaches both sides of everything, when any
+//! triangle lies off its plane. When no triangle is placed that way — one convex enclosure seen
+//! from inside or one convex solid seen from outside, without environment; a floor alone under
 //! lights — U = G and antiradiance never reaches anything, so the solver can leave it out.
 //!
 //! The test is conservative: triangles, not elements, with a tolerance of [`TOLERANCE`] of the
@@ -27,8 +29,8 @@ pub const PAIR_BUDGET: u64 = 400_000_000;
 pub enum Occlusion {
     /// No triangle can send antiradiance to another: U = G.
     Impossible,
-    /// These two meshes (by name) hold a pair that can occlude: the second lies behind the
-    /// first's plane while the first faces it.
+    /// These two meshes (by name) hold a pair that can occlude: the second lies off the first's
+    /// plane, on the side the first sends antiradiance to.
     Possible(String, String),
     /// The scene was too large to check within [`PAIR_BUDGET`].
     Undecided,
@@ -70,32 +72,28 @@ pub fn analyze(scene: &Scene) -> Occlusion {
             })
         })
         .collect();
-    // Triangles with some corner of the scene strictly behind their plane: only they can
-    // occlude. In a convex enclosure there are none and the check ends here.
-    let all: Vec<DVec3> = tris.iter().flat_map(|t| t.v).collect();
-    let occluders: Vec<usize> = (0..tris.len())
-        .into_par_iter()
-        .filter(|&i| {
-            let t = &tris[i];
-            all.iter().any(|&p| t.n.dot(p) - t.d < -eps)
-        })
-        .collect();
-    if occluders.is_empty() {
-        return Occlusion::Impossible;
-    }
+    // A triangle x blocks light arriving at either side and sends the antiradiance on out of
+    // the other side, where any surface off its plane receives it. So x can occlude when light
+    // can arrive at one side and something lies on the other: something on both sides, or,
+    // under an environment (which arrives at both sides of everything), anything off its plane.
+    // In a convex enclosure without environment nothing lies behind any wall, and around one
+    // convex solid nothing lies in front of any face.
+    let environment = scene.environment.max_element() > 0.0;
     let examined = AtomicU64::new(0);
     let n = tris.len() as u64;
-    let hit = occluders.par_iter().find_map_any(|&i| {
+    let hit = (0..tris.len()).into_par_iter().find_map_any(|i| {
         if examined.fetch_add(n, Ordering::Relaxed) > PAIR_BUDGET {
             return Some(None);
         }
         let x = &tris[i];
-        tris.iter()
-            .find(|y| {
-                // y partly behind x, and x partly in front of y.
-                x.extent(y).1 < -eps && y.extent(x).0 > eps
-            })
-            .map(|y| Some((x.mesh, y.mesh)))
+        let behind = tris.iter().find(|y| x.extent(y).1 < -eps);
+        let front = tris.iter().find(|y| x.extent(y).0 > eps);
+        let y = match (behind, front) {
+            (Some(b), Some(_)) => Some(b),
+            (b, f) if environment => b.or(f),
+            _ => None,
+        };
+        y.map(|y| Some((x.mesh, y.mesh)))
     });
     match hit {
         Some(Some((a, b))) => {

@@ -1,6 +1,6 @@
 //! Global pass (eq. 16): every link adds `F · I_ex(sender, sender_bin)` to the receiver's
 //! incident radiance, spread over bins by its cone class's table (every link is filtered), in
-//! the bins the receiver reads ([`System::reads`]: a leaf ignores light from behind). Parallel
+//! the bins the receiver reads ([`System::reads`]: a leaf only on the sides the link reaches). Parallel
 //! over receivers. The GPU draws exactly these bins, as runs of consecutive texels.
 
 use super::Table;
@@ -25,7 +25,7 @@ pub fn global(sys: &System, i_ex: &Table, l_in: &mut Table) {
                     .row(l.cone, l.receiver_bin as u32)
                     .expect("table of a used cone class");
                 for &(j, w) in spread {
-                    if sys.reads(r as u32, j as usize) {
+                    if sys.reads(l, j as usize) {
                         row[j as usize] += v * w as f64;
                     }
                 }

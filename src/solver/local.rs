@@ -1,6 +1,8 @@
 //! Local pass at the leaves: reflection (eq. 18) into front bins, antiradiance (eq. 19) into
-//! back bins, and the display intensity `I_total`. Light arriving from behind a leaf is ignored:
-//! for solid objects it has passed through the object's own surface, whose antiradiance cancels it.
+//! back bins, and the display intensity `I_total`. A surface is opaque from both sides: light
+//! arriving at a leaf's back is not reflected but blocked, so it becomes antiradiance leaving
+//! the front, `I_ex = I_L − a·c·cos·L_t` in a front bin. Not on a closed solid's surface
+//! ([`crate::solids`]): light inside a solid was already cancelled by its near face.
 
 use super::{CpuSolver, LocalMode};
 use crate::brdf::{lobe_shape, mirror};
@@ -81,7 +83,13 @@ pub fn local(s: &mut CpuSolver<'_>, mode: LocalMode) {
                         }
                     }
                     tot[j] = base * r_t;
-                    ex[j] = base * (r_t + r_d + ke);
+                    // Light arriving at the back in bin j is blocked: antiradiance out the front.
+                    let blocked = if antiradiance && leaf.blocks_back {
+                        lt(j)
+                    } else {
+                        DVec3::ZERO
+                    };
+                    ex[j] = base * (r_t + r_d + ke - blocked);
                 } else if cj < 0.0 {
                     if mode == LocalMode::Reflect {
                         continue;

@@ -180,7 +180,7 @@ impl<'a> CpuSolver<'a> {
     pub fn propagate(&mut self, mode: LocalMode) {
         let st = &mut self.state;
         global::global(self.sys, &st.i_ex, &mut st.l_in);
-        push::push(&self.sys.hierarchy, &st.l_in, &mut st.l_push);
+        push::push(self.sys, &st.l_in, &mut st.l_push);
         local::local(self, mode);
         pull::pull(&self.sys.hierarchy, &mut self.state.i_ex);
         self.state.propagations += 1;
