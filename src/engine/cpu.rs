@@ -4,7 +4,7 @@ use super::backend::Backend;
 use super::prepared::Prepared;
 use crate::error::Result;
 use crate::frame::lights::direct_in_table;
-use crate::frame::{cpu, Image};
+use crate::frame::Image;
 use crate::gpu::memory::MemoryReport;
 use crate::raycast::RayCaster;
 use crate::scene::{Precision, Scheme};
@@ -139,16 +139,7 @@ impl Backend for CpuBackend {
 
     fn draw(&mut self, prep: &Prepared) -> Result<Image> {
         let t = Instant::now();
-        let image = cpu::render(
-            &prep.scene,
-            &prep.lights,
-            &prep.camera,
-            &prep.system,
-            &self.state().i_total,
-            &prep.maps,
-            &prep.surfaces,
-            &self.caster,
-        );
+        let image = prep.render_cpu(&self.state().i_total, &self.caster);
         self.time("frame", t);
         Ok(image)
     }

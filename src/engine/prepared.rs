@@ -42,6 +42,25 @@ pub struct Prepared {
 }
 
 impl Prepared {
+    /// The CPU frame (`frame::cpu::render`) of this prepared scene from the display table
+    /// `i_total`, ray cast with `caster`: what every CPU backend draws.
+    pub fn render_cpu(
+        &self,
+        i_total: &crate::solver::Table,
+        caster: &crate::raycast::RayCaster,
+    ) -> crate::frame::Image {
+        crate::frame::cpu::render(
+            &self.scene,
+            &self.lights,
+            &self.camera,
+            &self.system,
+            i_total,
+            &self.maps,
+            &self.surfaces,
+            caster,
+        )
+    }
+
     /// Resolves `options` against `scene`, discretizes and links it (refusing before linking
     /// when the tables would not fit a device's `device_memory` bytes), and plans the passes.
     pub fn new(

@@ -8,7 +8,7 @@
 
 use crate::engine::{Backend, Prepared};
 use crate::error::Result;
-use crate::frame::{cpu, Image};
+use crate::frame::Image;
 use crate::gpu::frame::GpuFrame;
 use crate::gpu::memory::MemoryReport;
 use crate::gpu::{Context, GpuOptions, GpuSolver};
@@ -107,16 +107,7 @@ impl Backend for CpuInstant {
     }
     fn draw(&mut self, prep: &Prepared) -> Result<Image> {
         let t = Instant::now();
-        let image = cpu::render(
-            &prep.scene,
-            &prep.lights,
-            &prep.camera,
-            &prep.system,
-            &self.display,
-            &prep.maps,
-            &prep.surfaces,
-            &self.caster,
-        );
+        let image = prep.render_cpu(&self.display, &self.caster);
         self.timings.push(("frame".into(), ms(t)));
         Ok(image)
     }

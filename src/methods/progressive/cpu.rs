@@ -10,7 +10,7 @@ use super::{
 use crate::engine::{Backend, Prepared};
 use crate::error::Result;
 use crate::frame::lights::direct_in_table;
-use crate::frame::{cpu, Image};
+use crate::frame::Image;
 use crate::gpu::memory::MemoryReport;
 use crate::methods::{MethodReport, MethodSettings, Shot};
 use crate::raycast::RayCaster;
@@ -224,16 +224,7 @@ impl Backend for CpuShooting {
     fn draw(&mut self, prep: &Prepared) -> Result<Image> {
         let t = Instant::now();
         let table = self.shape.display(&self.els, &self.state.gathered);
-        let image = cpu::render(
-            &prep.scene,
-            &prep.lights,
-            &prep.camera,
-            &prep.system,
-            &table,
-            &prep.maps,
-            &prep.surfaces,
-            &self.caster,
-        );
+        let image = prep.render_cpu(&table, &self.caster);
         self.timings.push(("frame".into(), ms(t)));
         Ok(image)
     }
