@@ -79,6 +79,7 @@ const float AR_PI = 3.14159265358979;
 #define AR_FRAME_GBUF_VERTEX 10
 #define AR_FRAME_SPLAT 11
 #define AR_FRAME_EMITTERS 12
+#define AR_FRAME_GBUF_NORMAL 13
 
 layout(push_constant) uniform FrameConstants {
     mat4 view_proj;   // camera, or the shadow view being drawn
@@ -114,7 +115,16 @@ struct FrameElement {
     vec4 center_radius;
     vec4 normal_area;
     uvec4 ids;         // table row, surface id, mode (0 splat, 1 vertex), material
-    vec4 cos_norm;
+    vec4 cos_norm;     // x cosine normalization; y 1 with shading normals (OBJ vn), else 0
+};
+
+// A leaf around a shared vertex and its shading normal there (not normalized); scalars keep
+// the record 16 bytes in std430.
+struct AdjEntry {
+    uint leaf;
+    float nx;
+    float ny;
+    float nz;
 };
 #else
 layout(push_constant) uniform PassConstants {

@@ -110,7 +110,12 @@ void main() {
                 continue;
             }
             Material m = materials[e.ids.w];
-            vec3 l = ar_direct_radiance(g.xyz, n, m, wo);
+            // The shading normal (OBJ vn) lights the pixel; without, the face normal (shading.rs).
+            vec3 ns = n;
+            if (e.cos_norm.y > 0.5) {
+                ns = ar_shading_normal(texelFetch(gbuf_normal, t, 0).xyz, n, wo);
+            }
+            vec3 l = ar_direct_radiance(g.xyz, n, ns, m, wo);
             // Only the shading kinds the scene has are compiled in (AR_VERTEX, AR_SPLAT).
             if (e.ids.z == AR_MODE_VERTEX) {
                 if (AR_VERTEX) {

@@ -1,5 +1,5 @@
 // Shared code of the frame passes (shadow maps, G-buffer, splat, compose); mirrors
-// src/frame/{lights,shadow,surfaces}.rs, which the CPU frame uses. Constants here are checked
+// src/frame/{lights,shadow,surfaces,shading}.rs, which the CPU frame uses. Constants here are checked
 // against the Rust ones by tests in src/frame/shadow.rs and src/frame/surfaces.rs.
 #ifndef ANTIRADIANCE_FRAME_GLSL
 #define ANTIRADIANCE_FRAME_GLSL
@@ -12,12 +12,13 @@ layout(std430, binding = AR_FRAME_MATERIALS) readonly buffer Materials { Materia
 layout(std430, binding = AR_FRAME_BIN_CENTERS) readonly buffer BinCenters { vec4 bin_centers[]; };
 layout(std430, binding = AR_FRAME_ELEMENTS) readonly buffer Elements { FrameElement elements[]; };
 layout(std430, binding = AR_FRAME_ADJ_OFFSETS) readonly buffer AdjOffsets { uint adj_offsets[]; };
-layout(std430, binding = AR_FRAME_ADJ_LIST) readonly buffer AdjList { uint adj_list[]; };
+layout(std430, binding = AR_FRAME_ADJ_LIST) readonly buffer AdjList { AdjEntry adj_list[]; };
 layout(std430, binding = AR_FRAME_LIGHTS) readonly buffer Lights { Light lights[]; };
 layout(std430, binding = AR_FRAME_SHADOW_VIEWS) readonly buffer ShadowViews { ShadowView shadow_views[]; };
 layout(binding = AR_FRAME_SHADOW_MAP) uniform sampler2D shadow_map;
 layout(binding = AR_FRAME_GBUF_POSITION) uniform sampler2D gbuf_position;
 layout(binding = AR_FRAME_GBUF_VERTEX) uniform sampler2D gbuf_vertex;
+layout(binding = AR_FRAME_GBUF_NORMAL) uniform sampler2D gbuf_normal;
 layout(binding = AR_FRAME_SPLAT) uniform sampler2D splat_sum;
 layout(std430, binding = AR_FRAME_EMITTERS) readonly buffer Emitters { EmitterTriangle emitter_tris[]; };
 
@@ -58,6 +59,36 @@ vec3 ar_display_radiance(uint leaf, vec3 wo) {
     uint position = (b % ar_nu()) * ar_nv() + b / ar_nu();
     ivec2 t = ivec2((row / pc.sizes.w) * m + position, row % pc.sizes.w);
     return texelFetch(i_total, t, 0).rgb * pc.eye.w / (e.normal_area.w * e.cos_norm.x * cb);
+}
+
+// shading.rs MIN_EYE_COSINE.
+const float AR_MIN_EYE_COSINE = 0.01;
+
+// shading.rs shading_normal: the interpolated normal, tilted toward the eye until its cosine
+// to wo is AR_MIN_EYE_COSINE where it is less; the face normal where it cannot be normalized.
+vec3 ar_shading_normal(vec3 interpolated, vec3 geometric, vec3 wo) {
+    float len = length(interpolated);
+    if (!(len > 0.0)) {
+        return geometric;
+    }
+    vec3 n = interpolated / len;
+    float c = dot(n, wo);
+    if (c < AR_MIN_EYE_COSINE) {
+        n += wo * (AR_MIN_EYE_COSINE - c);
+        len = length(n);
+        if (!(len > 0.0)) {
+            return geometric;
+        }
+        n /= len;
+    }
+    return n;
+}
+
+// shading.rs eye_direction: wo turned by the rotation taking `shading` onto `geometric`.
+vec3 ar_eye_direction(vec3 wo, vec3 shading, vec3 geometric) {
+    vec3 v = cross(shading, geometric);
+    float c = dot(shading, geometric);
+    return wo * c + cross(v, wo) + v * (dot(v, wo) / max(1.0 + c, 1e-12));
 }
 
 float ar_splat_weight(float d, float r) {
@@ -171,8 +202,9 @@ float ar_visibility(Light l, vec3 p, vec3 n, float cosv) {
     return total > 0.0 ? lit / total : 1.0;
 }
 
-// lights.rs direct_radiance.
-vec3 ar_direct_radiance(vec3 p, vec3 n, Material m, vec3 wo) {
+// lights.rs direct_radiance: n the face normal (front side, shadow lookup), ns the shading
+// normal (receiver cosine, BRDF).
+vec3 ar_direct_radiance(vec3 p, vec3 n, vec3 ns, Material m, vec3 wo) {
     vec3 l = vec3(0.0);
     for (uint i = 0u; i < pc.misc.x; i++) {
         vec3 travel;
@@ -180,13 +212,14 @@ vec3 ar_direct_radiance(vec3 p, vec3 n, Material m, vec3 wo) {
         if (!ar_incident(lights[i], p, travel, e)) {
             continue;
         }
-        float cosv = -dot(travel, n);
-        if (cosv <= 0.0) {
+        float cos_face = -dot(travel, n);
+        float cosv = -dot(travel, ns);
+        if (cos_face <= 0.0 || cosv <= 0.0) {
             continue;
         }
-        float v = ar_visibility(lights[i], p, n, cosv);
+        float v = ar_visibility(lights[i], p, n, cos_face);
         if (v > 0.0) {
-            l += ar_brdf(m, n, travel, wo) * e * (cosv * v);
+            l += ar_brdf(m, ns, travel, wo) * e * (cosv * v);
         }
     }
     return l;

@@ -20,5 +20,14 @@ void main() {
     if (w <= 0.0) {
         discard;
     }
-    acc = vec4(ar_display_radiance(leaf, normalize(pc.eye.xyz - g.xyz)) * w, w);
+    // The bin toward the eye as the pixel's shading normal sees it (shading.rs eye_direction);
+    // the splatted elements lie in the pixel's plane.
+    vec3 wo = normalize(pc.eye.xyz - g.xyz);
+    vec3 dir = wo;
+    if (h.cos_norm.y > 0.5) {
+        vec3 n = h.normal_area.xyz;
+        vec3 ns = ar_shading_normal(texelFetch(gbuf_normal, ivec2(gl_FragCoord.xy), 0).xyz, n, wo);
+        dir = ar_eye_direction(wo, ns, n);
+    }
+    acc = vec4(ar_display_radiance(leaf, dir) * w, w);
 }

@@ -1,12 +1,14 @@
 //! The frame on the CPU: the same image formation as the GPU frame passes (`src/gpu/frame.rs`),
 //! by ray casting at the same 2×2 sample positions: emission, per-pixel direct light with the
-//! shadow maps, indirect light splatted or vertex-interpolated, environment where rays escape;
+//! shadow maps (at the interpolated shading normal where the mesh has `vn`, `shading.rs`),
+//! indirect light splatted or vertex-interpolated, environment where rays escape;
 //! pixels at an emitter's edge take its emission from sub-pixel rays (`edges.rs`).
 
 use super::camera::{View, SUPERSAMPLE};
 use super::edges::{EmitterTriangles, SampleHit};
 use super::image::Image;
 use super::lights::direct_radiance;
+use super::shading::{eye_direction, shading_normal};
 use super::shadow::ShadowMaps;
 use super::surfaces::{display_radiance, splat_weight, vertex_values, Surfaces, MODE_VERTEX};
 use crate::raycast::RayCaster;
@@ -100,7 +102,16 @@ pub fn render(
                         if wo.dot(leaf.normal) <= 0.0 {
                             (DVec3::ZERO, DVec3::ZERO, kind) // one-sided: the back is black
                         } else {
-                            let mut l = direct_radiance(lights, maps, p, leaf.normal, mat, wo);
+                            // The shading normal lights the pixel and picks the bin toward
+                            // the eye (`shading.rs`); without `vn` it is the face normal.
+                            let (ns, dir) = if surf.shaded[li] {
+                                let n = surf.interpolated_normal(li, hit.u, hit.v);
+                                let ns = shading_normal(n, leaf.normal, wo);
+                                (ns, eye_direction(wo, ns, leaf.normal))
+                            } else {
+                                (leaf.normal, wo)
+                            };
+                            let mut l = direct_radiance(lights, maps, p, leaf.normal, ns, mat, wo);
                             if surf.mode[li] == MODE_VERTEX {
                                 let cv = surf.corner_vertex[li];
                                 l += verts[cv[0] as usize] * (1.0 - hit.u - hit.v)
@@ -117,7 +128,7 @@ pub fn render(
                                             surf.radius[e],
                                         );
                                         if wt > 0.0 {
-                                            acc += display_radiance(sys, i_total, e, wo) * wt;
+                                            acc += display_radiance(sys, i_total, e, dir) * wt;
                                             wsum += wt;
                                         }
                                     }

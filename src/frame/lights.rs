@@ -119,13 +119,17 @@ pub fn brdf(mat: &Material, n: DVec3, travel: DVec3, wo: DVec3) -> DVec3 {
     f
 }
 
-/// Radiance reflected toward `wo` at surface point `p` (unit normal `n`, facing `wo`) from every
-/// analytic light, shadowed by `maps`.
+/// Radiance reflected toward `wo` at surface point `p` from every analytic light, shadowed by
+/// `maps`. `n` is the face's unit normal (facing `wo`): light must arrive at its front (the
+/// surface is opaque from both sides) and the shadow lookup uses it; `shading` is the unit
+/// shading normal ([`super::shading`]; `n` itself without `vn`), which gives the receiver's
+/// cosine, clamped at 0, and the BRDF.
 pub fn direct_radiance(
     lights: &[Light],
     maps: &ShadowMaps,
     p: DVec3,
     n: DVec3,
+    shading: DVec3,
     mat: &Material,
     wo: DVec3,
 ) -> DVec3 {
@@ -134,13 +138,14 @@ pub fn direct_radiance(
         let Some(inc) = incident(light, p) else {
             continue;
         };
-        let cos = -inc.travel.dot(n);
-        if cos <= 0.0 {
+        let cos_face = -inc.travel.dot(n);
+        let cos = -inc.travel.dot(shading);
+        if cos_face <= 0.0 || cos <= 0.0 {
             continue;
         }
-        let v = maps.visibility(i, p, n, cos);
+        let v = maps.visibility(i, p, n, cos_face);
         if v > 0.0 {
-            l += brdf(mat, n, inc.travel, wo) * inc.irradiance * (cos * v);
+            l += brdf(mat, shading, inc.travel, wo) * inc.irradiance * (cos * v);
         }
     }
     l

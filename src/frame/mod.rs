@@ -8,6 +8,7 @@ pub mod edges;
 pub mod emitters;
 pub mod image;
 pub mod lights;
+pub mod shading;
 pub mod shadow;
 pub mod surfaces;
 

@@ -5,6 +5,7 @@
 //! surfaces are view dependent. `glsl/frame.glsl` mirrors [`display_radiance`] and [`splat_weight`].
 
 use super::lights::front_bin;
+use super::shading::{eye_direction, shading_normal};
 use crate::solver::Table;
 use crate::system::System;
 use glam::DVec3;
@@ -48,6 +49,15 @@ pub struct Surfaces {
     pub triangle_leaf: Vec<u32>,
     /// Per input triangle: its corners as shared vertices (vertex mode) or `u32::MAX`.
     pub triangle_vertices: Vec<[u32; 3]>,
+    /// Whether a leaf's triangle has shading normals (its mesh has `vn`); the others shade with
+    /// their face normal exactly as without shading normals.
+    pub shaded: Vec<bool>,
+    /// Per leaf: the triangle's vertex normals interpolated to the element's corners (not
+    /// normalized, so that interpolating them across the element is interpolating across the
+    /// triangle); the face normal three times where not [`Surfaces::shaded`].
+    pub corner_normal: Vec<[DVec3; 3]>,
+    /// The shading normal of each entry of [`Surfaces::adjacency`] at its shared vertex.
+    pub adjacency_normal: Vec<DVec3>,
 }
 
 struct UnionFind(Vec<u32>);
@@ -131,9 +141,12 @@ impl Surfaces {
             adjacency: Vec::new(),
             triangle_leaf: vec![u32::MAX; normals.len()],
             triangle_vertices: vec![[u32::MAX; 3]; normals.len()],
+            shaded: Vec::with_capacity(n),
+            corner_normal: Vec::with_capacity(n),
+            adjacency_normal: Vec::new(),
         };
         let mut vertex_ids: HashMap<(usize, i64, i64, i64), u32> = HashMap::new();
-        let mut lists: Vec<Vec<u32>> = Vec::new();
+        let mut lists: Vec<Vec<(u32, DVec3)>> = Vec::new();
         for (li, leaf) in sys.leaves.iter().enumerate() {
             let e = &sys.elements[sys.hierarchy.element(leaf.node).expect("leaf") as usize];
             let tri = first_tri[e.mesh as usize] + e.triangle;
@@ -147,8 +160,18 @@ impl Surfaces {
             s.center.push(e.center);
             s.radius.push(r);
             s.surface.push(uf.find(tri));
+            let mesh = &scene.meshes[e.mesh as usize];
+            let shaded = !mesh.normals.is_empty();
+            let corner_normal = if shaded {
+                corner_normals(mesh, e.triangle as usize, &e.corners)
+            } else {
+                [leaf.normal; 3]
+            };
+            s.shaded.push(shaded);
+            s.corner_normal.push(corner_normal);
             if smooth[tri as usize] {
                 s.mode.push(MODE_VERTEX);
+                let mut k = 0;
                 s.corner_vertex.push(e.corners.map(|c| {
                     let id = *vertex_ids
                         .entry(key(e.mesh as usize, c))
@@ -157,7 +180,8 @@ impl Surfaces {
                             lists.push(Vec::new());
                             (s.vertices.len() - 1) as u32
                         });
-                    lists[id as usize].push(li as u32);
+                    lists[id as usize].push((li as u32, corner_normal[k]));
+                    k += 1;
                     id
                 }));
             } else {
@@ -181,16 +205,38 @@ impl Surfaces {
         }
         s.adjacency_offsets.push(0);
         for l in lists {
-            s.adjacency.extend(l);
+            s.adjacency.extend(l.iter().map(|e| e.0));
+            s.adjacency_normal.extend(l.iter().map(|e| e.1));
             s.adjacency_offsets.push(s.adjacency.len() as u32);
         }
         s
+    }
+
+    /// The (unnormalized) interpolated shading normal at barycentric `(u, v)` of leaf `li`
+    /// (weights `1 − u − v`, `u`, `v` on its corners).
+    pub fn interpolated_normal(&self, li: usize, u: f64, v: f64) -> DVec3 {
+        let n = &self.corner_normal[li];
+        n[0] * (1.0 - u - v) + n[1] * u + n[2] * v
     }
 
     /// Number of leaves splatted.
     pub fn splat_count(&self) -> usize {
         self.mode.iter().filter(|&&m| m == MODE_SPLAT).count()
     }
+}
+
+/// `mesh`'s vertex normals of triangle `t` interpolated (barycentrically, not normalized) to
+/// `points` on it.
+fn corner_normals(mesh: &crate::scene::Mesh, t: usize, points: &[DVec3; 3]) -> [DVec3; 3] {
+    let [a, b, c] = mesh.triangles[t].map(|v| mesh.positions[v as usize]);
+    let n = mesh.normals[t];
+    let cross = (b - a).cross(c - a);
+    let area2 = cross.length_squared();
+    points.map(|p| {
+        let wb = (p - a).cross(c - a).dot(cross) / area2;
+        let wc = (b - a).cross(p - a).dot(cross) / area2;
+        n[0] * (1.0 - wb - wc) + n[1] * wb + n[2] * wc
+    })
 }
 
 /// Smooth fall-off of a splat: `(1 − (d/R)²)²` inside the support, 0 outside.
@@ -216,7 +262,8 @@ pub fn display_radiance(sys: &System, i_total: &Table, li: usize, wo: DVec3) -> 
 }
 
 /// Per-vertex values for an eye at `eye`: the area-weighted mean of the display radiance of the
-/// elements around each shared vertex that face the eye.
+/// elements around each shared vertex that face the eye, each read in the bin of
+/// [`eye_direction`] for its shading normal at the vertex.
 pub fn vertex_values(surf: &Surfaces, sys: &System, i_total: &Table, eye: DVec3) -> Vec<DVec3> {
     (0..surf.vertices.len())
         .map(|v| {
@@ -226,10 +273,20 @@ pub fn vertex_values(surf: &Surfaces, sys: &System, i_total: &Table, eye: DVec3)
                 surf.adjacency_offsets[v + 1] as usize,
             );
             let (mut sum, mut w) = (DVec3::ZERO, 0.0);
-            for &li in &surf.adjacency[a..b] {
+            for (&li, &ns) in surf.adjacency[a..b]
+                .iter()
+                .zip(&surf.adjacency_normal[a..b])
+            {
                 let leaf = &sys.leaves[li as usize];
                 if wo.dot(leaf.normal) > 0.0 {
-                    sum += display_radiance(sys, i_total, li as usize, wo) * leaf.area;
+                    // The bin toward the eye as the vertex's shading normal sees it.
+                    let dir = if surf.shaded[li as usize] {
+                        let ns = shading_normal(ns, leaf.normal, wo);
+                        eye_direction(wo, ns, leaf.normal)
+                    } else {
+                        wo
+                    };
+                    sum += display_radiance(sys, i_total, li as usize, dir) * leaf.area;
                     w += leaf.area;
                 }
             }

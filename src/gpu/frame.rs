@@ -49,7 +49,7 @@ struct FrameData {
     bin_centers: Vec<[f32; 4]>,
     elements: Vec<super::layout::GpuFrameElement>,
     adj_offsets: Vec<u32>,
-    adj_list: Vec<u32>,
+    adj_list: Vec<super::layout::GpuAdjEntry>,
     lights: Vec<super::layout::GpuLight>,
     shadow_views: Vec<super::layout::GpuShadowView>,
     emitters: Vec<super::layout::GpuEmitterTriangle>,
@@ -66,7 +66,7 @@ impl FrameData {
     ) -> Self {
         // Shared-vertex adjacency only where smooth meshes are interpolated.
         let (adj_offsets, adj_list) = if f.vertex {
-            (surf.adjacency_offsets.clone(), surf.adjacency.clone())
+            (surf.adjacency_offsets.clone(), pack::adjacency(surf))
         } else {
             (Vec::new(), Vec::new())
         };
@@ -200,12 +200,7 @@ impl GpuFrame {
         let specialization = spec::values(features, 0, false);
         let pipes = FramePipelines {
             shadow: passes::shadow::pipeline(c, &layouts.pipeline, &specialization)?,
-            gbuffer: passes::gbuffer::pipeline(
-                c,
-                &layouts.pipeline,
-                &specialization,
-                features.vertex,
-            )?,
+            gbuffer: passes::gbuffer::pipeline(c, &layouts.pipeline, &specialization, features)?,
             splat: passes::splat::pipeline(c, &layouts.pipeline, &specialization)?,
             compose: passes::compose::pipeline(c, &layouts.pipeline, &specialization)?,
         };
@@ -252,8 +247,11 @@ impl GpuFrame {
         if self.shadow_rects.is_empty() {
             unused.push((&mut im.shadow_map, crate::frame::shadow::EMPTY));
         }
-        if !self.features.vertex {
+        if !self.features.vertex && !self.features.normals {
             unused.push((&mut im.gbuf_vertex, 0.0));
+        }
+        if !self.features.normals {
+            unused.push((&mut im.gbuf_normal, 0.0));
         }
         if !self.features.splat {
             unused.push((&mut im.splat, 0.0));
@@ -285,6 +283,7 @@ impl GpuFrame {
                     fb::SHADOW_MAP => im.shadow_map.view,
                     fb::GBUF_POSITION => im.gbuf_position.view,
                     fb::GBUF_VERTEX => im.gbuf_vertex.view,
+                    fb::GBUF_NORMAL => im.gbuf_normal.view,
                     _ => im.splat.view,
                 };
                 (b, view)
@@ -356,7 +355,7 @@ impl GpuFrame {
         constants.sizes[3] = layout.rows_per_column;
         solver.prepare_display(cmd);
         let ctx = self.ctx.clone();
-        let vertex = self.features.vertex;
+        let features = self.features;
         let splat = self.features.splat;
         self.profiler.begin(&ctx, cmd, "gbuffer");
         let corners = self.buffers.corners.raw;
@@ -373,7 +372,7 @@ impl GpuFrame {
             corners,
             self.corner_count,
             constants,
-            vertex,
+            &features,
         );
         self.profiler.end(&ctx, cmd);
         if splat {

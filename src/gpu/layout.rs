@@ -282,11 +282,23 @@ pub struct GpuFrameElement {
     pub normal_area: [f32; 4],
     /// Table row, flat-surface id, shading mode, material index.
     pub ids: [u32; 4],
-    /// Cosine normalization (x).
+    /// Cosine normalization (x); 1 where the leaf has shading normals, else 0 (y).
     pub cos_norm: [f32; 4],
 }
 
-/// One element corner as vertex input of the shadow and G-buffer passes (20 bytes).
+/// One entry of the shared-vertex leaf lists (`AdjEntry` in common.glsl, 16 bytes): a leaf
+/// around the vertex and its shading normal there ([`crate::frame::surfaces::Surfaces`]
+/// `adjacency`, `adjacency_normal`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct GpuAdjEntry {
+    /// Leaf slot.
+    pub leaf: u32,
+    /// Its interpolated vertex normal at the shared vertex (not normalized).
+    pub normal: [f32; 3],
+}
+
+/// One element corner as vertex input of the shadow and G-buffer passes (32 bytes).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct CornerVertex {
@@ -296,6 +308,9 @@ pub struct CornerVertex {
     pub leaf: u32,
     /// Shared vertex (vertex-interpolated elements) or `u32::MAX`.
     pub vertex: u32,
+    /// Shading normal at the corner (interpolated vertex normals, not normalized; the face
+    /// normal without `vn`), interpolated by the rasterizer into the G-buffer.
+    pub normal: [f32; 3],
 }
 
 /// Descriptor bindings of the frame passes (`AR_FRAME_*` in common.glsl).
@@ -326,8 +341,10 @@ pub mod frame_binding {
     pub const SPLAT: u32 = 11;
     /// Emitting triangles (storage).
     pub const EMITTERS: u32 = 12;
+    /// G-buffer: interpolated shading normal (xyz) where the scene has `vn` (sampled).
+    pub const GBUF_NORMAL: u32 = 13;
     /// Number of bindings.
-    pub const COUNT: u32 = 13;
+    pub const COUNT: u32 = 14;
     /// Storage-buffer bindings (the rest are combined image samplers).
     pub const BUFFERS: [u32; 8] = [
         EMITTERS,
@@ -489,8 +506,11 @@ mod tests {
             glsl_fields("FrameElement"),
             ["center_radius", "normal_area", "ids", "cos_norm"]
         );
-        assert_eq!(size_of::<CornerVertex>(), 20);
+        assert_eq!(size_of::<CornerVertex>(), 32);
         assert_eq!(offset_of!(CornerVertex, vertex), 16);
+        assert_eq!(offset_of!(CornerVertex, normal), 20);
+        assert_eq!(size_of::<GpuAdjEntry>(), 16);
+        assert_eq!(glsl_fields("AdjEntry"), ["leaf", "nx", "ny", "nz"]);
         let names = [
             "I_TOTAL",
             "MATERIALS",
@@ -505,6 +525,7 @@ mod tests {
             "GBUF_VERTEX",
             "SPLAT",
             "EMITTERS",
+            "GBUF_NORMAL",
         ];
         assert_eq!(names.len() as u32, frame_binding::COUNT);
         for (value, name) in names.iter().enumerate() {

@@ -2,7 +2,9 @@
 //! (texel formats, table layout, `#[repr(C)]` records of [`super::layout`]). No Vulkan calls, so
 //! every function is unit-tested without a device.
 
-use super::layout::{CornerVertex, GpuFrameElement, GpuLight, GpuMaterial, GpuShadowView};
+use super::layout::{
+    CornerVertex, GpuAdjEntry, GpuFrameElement, GpuLight, GpuMaterial, GpuShadowView,
+};
 use super::tables::TableLayout;
 use crate::frame::shadow::ShadowMaps;
 use crate::frame::surfaces::{Surfaces, MODE_SPLAT};
@@ -283,19 +285,22 @@ pub fn corners(scene: &Scene, sys: &System, surf: &Surfaces) -> Vec<CornerVertex
             position: [p.x as f32, p.y as f32, p.z as f32],
             leaf: li as u32,
             vertex: surf.corner_vertex[li][k],
+            normal: v3(surf.corner_normal[li][k]),
         })
         .collect();
     let mut tri = 0usize;
     for m in &scene.meshes {
-        for t in &m.triangles {
+        for (ti, t) in m.triangles.iter().enumerate() {
             let leaf = surf.triangle_leaf[tri];
             if leaf != u32::MAX {
-                for (&v, &vertex) in t.iter().zip(&surf.triangle_vertices[tri]) {
-                    let p = m.positions[v as usize];
+                let normals = m.corner_normals(ti);
+                for k in 0..3 {
+                    let p = m.positions[t[k] as usize];
                     out.push(CornerVertex {
                         position: [p.x as f32, p.y as f32, p.z as f32],
                         leaf: leaf | FILLER,
-                        vertex,
+                        vertex: surf.triangle_vertices[tri][k],
+                        normal: v3(normals[k]),
                     });
                 }
             }
@@ -303,6 +308,23 @@ pub fn corners(scene: &Scene, sys: &System, surf: &Surfaces) -> Vec<CornerVertex
         }
     }
     out
+}
+
+/// A vector as three floats.
+fn v3(v: DVec3) -> [f32; 3] {
+    [v.x as f32, v.y as f32, v.z as f32]
+}
+
+/// The shared-vertex leaf lists with each leaf's shading normal at the vertex.
+pub fn adjacency(surf: &Surfaces) -> Vec<GpuAdjEntry> {
+    surf.adjacency
+        .iter()
+        .zip(&surf.adjacency_normal)
+        .map(|(&leaf, &n)| GpuAdjEntry {
+            leaf,
+            normal: v3(n),
+        })
+        .collect()
 }
 
 /// Leaf slots splatted by the frame (flat-surface elements, when the plan splats).
@@ -321,7 +343,7 @@ pub fn frame_elements(sys: &System, surf: &Surfaces) -> Vec<GpuFrameElement> {
             center_radius: v4(surf.center[li], surf.radius[li] as f32),
             normal_area: v4(l.normal, l.area as f32),
             ids: [l.node, surf.surface[li], surf.mode[li], l.material],
-            cos_norm: [l.cos_norm as f32, 0.0, 0.0, 0.0],
+            cos_norm: [l.cos_norm as f32, surf.shaded[li] as u32 as f32, 0.0, 0.0],
         })
         .collect()
 }

@@ -37,6 +37,8 @@ pub struct Features {
     pub splat: bool,
     /// Vertex interpolation for smooth shared-vertex meshes (per-vertex radiance in the G-buffer).
     pub vertex: bool,
+    /// Shading normals from OBJ `vn` (an interpolated-normal target in the G-buffer).
+    pub normals: bool,
 }
 
 impl Features {
@@ -51,6 +53,7 @@ impl Features {
         emission: true,
         splat: true,
         vertex: true,
+        normals: true,
     };
 
     /// What `sys` could use without knowing its lights: its materials decide the local passes;
@@ -209,6 +212,10 @@ impl Plan {
                 (false, false) => "nothing to draw",
             }
         ));
+        let normals = surf.shaded.contains(&true);
+        if normals {
+            d.push("shading normals: OBJ vn interpolated per pixel for direct light and the bin toward the eye (a G-buffer normal target)".into());
+        }
         let (precision, why) = Range::of(sys, scene.environment, 0.0).precision(requested);
         d.push(match (precision, why.clone()) {
             (_, Some(why)) => why,
@@ -223,6 +230,7 @@ impl Plan {
                 emission,
                 splat,
                 vertex,
+                normals,
                 ..f0
             },
             shadow,

@@ -225,9 +225,15 @@ impl Scene {
         let o = &mut self.objects[object];
         let step = m * o.transform.inverse();
         o.transform = m;
+        // Shading normals by the inverse transpose (turned with the winding by a mirror).
+        let linear = glam::DMat3::from_mat4(step);
+        let normal_matrix = linear.inverse().transpose() * linear.determinant().signum();
         for mesh in &mut self.meshes[o.meshes.clone()] {
             for p in &mut mesh.positions {
                 *p = step.transform_point3(*p);
+            }
+            for n in mesh.normals.iter_mut().flatten() {
+                *n = (normal_matrix * *n).normalize();
             }
         }
     }

@@ -71,6 +71,27 @@ pub struct Mesh {
     pub triangles: Vec<[u32; 3]>,
     /// Index into [`Scene::materials`] per triangle.
     pub material: Vec<u32>,
+    /// Shading normals (unit, world space) at each triangle's corners, from the OBJ's `vn`:
+    /// empty when the mesh has none, else one per triangle, a face without (valid) `vn` having
+    /// its face normal at all three. They shade the frame only; the solver's elements stay
+    /// planar.
+    pub normals: Vec<[DVec3; 3]>,
+}
+
+impl Mesh {
+    /// Unit front normal of triangle `t` (counter-clockwise corners).
+    pub fn face_normal(&self, t: usize) -> DVec3 {
+        let [a, b, c] = self.triangles[t].map(|v| self.positions[v as usize]);
+        (b - a).cross(c - a).normalize_or_zero()
+    }
+
+    /// Shading normals at triangle `t`'s corners: its `vn`, or its face normal three times.
+    pub fn corner_normals(&self, t: usize) -> [DVec3; 3] {
+        match self.normals.get(t) {
+            Some(n) => *n,
+            None => [self.face_normal(t); 3],
+        }
+    }
 }
 
 /// An analytic light.
@@ -295,6 +316,7 @@ impl Scene {
             positions,
             triangles,
             material: vec![material; n],
+            normals: Vec::new(),
         });
     }
 

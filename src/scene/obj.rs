@@ -30,6 +30,12 @@ pub struct ObjScan {
     /// Faces that repeat an earlier face (the same corner positions in the same cyclic order,
     /// whatever vertex they start from): line → line of the earlier face.
     pub repeated_faces: HashMap<u32, u32>,
+    /// Every `vn`, as `tobj` parses it (float32), in file order.
+    pub normals: Vec<[f32; 3]>,
+    /// Per triangle `tobj` makes (as [`ObjScan::triangle_lines`]): the `vn` of its corners
+    /// (indices into [`ObjScan::normals`]), or `None` when a corner has none. `tobj` drops
+    /// normals misaligned when only some faces have them, so they are taken from the scan.
+    pub triangle_normals: Vec<Option<[u32; 3]>>,
 }
 
 /// Parses one number as `tobj` does (float32).
@@ -100,11 +106,15 @@ pub fn scan_obj(text: &str, path: &Path) -> Result<ObjScan> {
             }
             Some(k @ ("vt" | "vn")) => {
                 let (kind, want) = if k == "vt" { (1, 2) } else { (2, 3) };
-                if words.take(want).map_while(number).count() < want {
+                let values: Vec<f32> = words.take(want).map_while(number).collect();
+                if values.len() < want {
                     return Err(err(
                         no,
                         format!("malformed `{}`: expected {want} numbers", line.trim()),
                     ));
+                }
+                if kind == 2 {
+                    s.normals.push([values[0], values[1], values[2]]);
                 }
                 counts[kind] += 1;
             }
@@ -126,6 +136,8 @@ pub fn scan_obj(text: &str, path: &Path) -> Result<ObjScan> {
                     ));
                 }
                 let first_corner = corners.len();
+                // Each corner's `vn` as resolved (None without one), for the fanned triangles.
+                let mut corner_normals: Vec<Option<isize>> = Vec::with_capacity(refs.len());
                 for r in &refs {
                     let parts: Vec<&str> = r.split('/').collect();
                     let bad = || {
@@ -146,8 +158,24 @@ pub fn scan_obj(text: &str, path: &Path) -> Result<ObjScan> {
                         };
                         corners.push((no as u32, kind, at, x));
                     }
+                    corner_normals.push(
+                        parts
+                            .get(2)
+                            .filter(|p| !p.is_empty())
+                            .and_then(|p| p.parse::<isize>().ok())
+                            .map(|x| if x < 0 { counts[2] as isize + x } else { x - 1 }),
+                    );
                 }
                 faces.push((no as u32, first_corner..corners.len()));
+                // tobj fans a face from its first corner: (0, k, k + 1). Indices are checked
+                // below; an out-of-range one fails the scan before these are used.
+                for k in 1..refs.len() - 1 {
+                    let tri = [0, k, k + 1].map(|i| corner_normals[i]);
+                    s.triangle_normals.push(match tri {
+                        [Some(a), Some(b), Some(c)] => Some([a, b, c].map(|i| i.max(0) as u32)),
+                        _ => None,
+                    });
+                }
                 s.triangle_lines
                     .extend(std::iter::repeat_n(no as u32, refs.len() - 2));
                 match material {
@@ -227,6 +255,10 @@ pub fn scan_obj(text: &str, path: &Path) -> Result<ObjScan> {
                 first_of.insert(key, *no);
             }
         }
+    }
+    if s.normals.is_empty() {
+        // As tobj: normal indices in a file without `vn` are ignored.
+        s.triangle_normals.iter_mut().for_each(|t| *t = None);
     }
     s.usemtl.retain(|(_, line)| *line != u32::MAX);
     s.text = if s.polylines.is_empty() {
@@ -377,6 +409,25 @@ mod tests {
         let s = scan("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\nf 3 4 1 2\nf 4 3 2 1\nv 1 1 0\nf 1 2 -1 4\n")
             .unwrap();
         assert_eq!(s.repeated_faces, HashMap::from([(6, 5), (9, 5)]));
+    }
+
+    #[test]
+    fn normals_follow_the_fanned_triangles() {
+        // A quad with normals on every corner (fanned as tobj does), a triangle without, one
+        // with relative indices, and one where a corner lacks its normal.
+        let s = scan(
+            "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvn 0 0 1\nvn 0 0.6 0.8\n\
+             f 1//1 2//2 3//1 4//2\nf 1 2 3\nf 1/ 2//-1 3//-2\nf 1//1 2 3//1\n",
+        )
+        .unwrap();
+        assert_eq!(s.normals, vec![[0.0, 0.0, 1.0], [0.0, 0.6, 0.8]]);
+        assert_eq!(
+            s.triangle_normals,
+            vec![Some([0, 1, 0]), Some([0, 0, 1]), None, None, None]
+        );
+        // Normal indices in a file without `vn` are ignored (as tobj does).
+        let s = scan("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1//1 2//1 3//1\n").unwrap();
+        assert_eq!(s.triangle_normals, vec![None]);
     }
 
     #[test]

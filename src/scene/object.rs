@@ -7,7 +7,7 @@ use super::load::{color, mesh_err, scene_err, source};
 use super::obj::{self, ObjScan};
 use super::{Material, Mesh, Scene, MAX_COORDINATE};
 use crate::error::{Error, Result};
-use glam::{DMat4, DVec3};
+use glam::{DMat3, DMat4, DVec3};
 use std::cell::RefCell;
 use std::collections::{BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
@@ -91,6 +91,11 @@ pub fn load_object(
     let mut seen: HashMap<[[u64; 3]; 3], usize> = HashMap::new();
     let (mut duplicates, mut first_duplicate) = (0usize, None);
     let mut t_file = 0usize;
+    // Normals go by the inverse transpose; a mirroring transform turns the face's winding, and
+    // so its front, around, and the shading normals with it.
+    let linear = DMat3::from_mat4(src.transform);
+    let normal_matrix = linear.inverse().transpose() * linear.determinant().signum();
+    let (mut bad_normals, mut first_bad) = (0usize, None);
     for model in &models {
         let mesh = &model.mesh;
         let positions: Vec<DVec3> = mesh
@@ -115,6 +120,7 @@ pub fn load_object(
             }),
         };
         let mut triangles = Vec::with_capacity(mesh.indices.len() / 3);
+        let mut normals: Vec<Option<[DVec3; 3]>> = Vec::with_capacity(mesh.indices.len() / 3);
         for idx in mesh.indices.chunks_exact(3) {
             let t = t_file;
             t_file += 1;
@@ -155,8 +161,43 @@ pub fn load_object(
             }
             seen.insert(key, t);
             triangles.push(tri);
+            // The scan's normals are tobj's triangles only when the counts agree (`lines`).
+            let vn = lines.and(scan.triangle_normals.get(t).copied().flatten());
+            let face = (b - a).cross(c - a).normalize();
+            normals.push(vn.and_then(|vn| {
+                let placed = vn.map(|i| {
+                    let [x, y, z] = scan.normals[i as usize];
+                    normal_matrix * DVec3::new(x as f64, y as f64, z as f64)
+                });
+                let usable = |n: &DVec3| {
+                    let len = n.length();
+                    len.is_finite() && len > 0.0 && n.dot(face) >= 0.0
+                };
+                if placed.iter().all(usable) {
+                    Some(placed.map(DVec3::normalize))
+                } else {
+                    bad_normals += 1;
+                    first_bad.get_or_insert(t);
+                    None
+                }
+            }));
         }
         let n = triangles.len();
+        // Faces without (usable) `vn` get their face normal; a mesh with none keeps none.
+        let normals = if normals.iter().any(Option::is_some) {
+            triangles
+                .iter()
+                .zip(normals)
+                .map(|(tri, vn)| {
+                    vn.unwrap_or_else(|| {
+                        let [a, b, c] = tri.map(|v| positions[v as usize]);
+                        [(b - a).cross(c - a).normalize(); 3]
+                    })
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
         scene.meshes.push(Mesh {
             name: if model.name.is_empty() {
                 format!("object{i}")
@@ -167,7 +208,15 @@ pub fn load_object(
             positions,
             triangles,
             material: vec![mat; n],
+            normals,
         });
+    }
+    if let Some(t) = first_bad {
+        warned.insert(format!(
+            "{shown}: {bad_normals} {} unusable `vn` (zero length, not finite, or facing more than 90° away from the face; first: {}): shaded with the face normal",
+            if bad_normals == 1 { "triangle has" } else { "triangles have" },
+            describe(t),
+        ));
     }
     if total == 0 {
         return Err(mesh_err(&obj_path, "mesh has no faces".into()));

@@ -1,6 +1,7 @@
 //! G-buffer (§4.3, first of the three splatting passes): every element at 2×2 samples per
 //! pixel, depth-tested, storing position and leaf (the surface id comes with the leaf) and the
-//! vertex-interpolated indirect radiance of smooth meshes.
+//! vertex-interpolated indirect radiance of smooth meshes and, where the scene has OBJ `vn`,
+//! the interpolated shading normal.
 
 use super::shadow::POSITION;
 use super::targets::{FrameImages, RGBA32F};
@@ -12,44 +13,57 @@ use crate::gpu::handle::Owned;
 use crate::gpu::layout::{CornerVertex, FrameConstants};
 use crate::gpu::memory::Image;
 use crate::gpu::pipelines::{create, PipelineDesc, Target};
+use crate::plan::Features;
 use ash::vk;
 use std::sync::Arc;
 
-/// The pipeline: corners with leaf and shared vertex, position (+ vertex radiance when
-/// `vertex`) targets, depth-tested.
+/// How many colour targets the G-buffer has under `f`: position, then vertex radiance (also
+/// when only the normal needs it, attachments being positional), then the shading normal.
+fn target_count(f: &Features) -> usize {
+    if f.normals {
+        3
+    } else if f.vertex {
+        2
+    } else {
+        1
+    }
+}
+
+/// The pipeline: corners with leaf, shared vertex and shading normal; position (+ vertex
+/// radiance, + shading normal, as `features` need them) targets, depth-tested.
 pub fn pipeline(
     ctx: &Arc<Context>,
     layout: &Owned<vk::PipelineLayout>,
     specialization: &[u32],
-    vertex: bool,
+    features: &Features,
 ) -> Result<Owned<vk::Pipeline>> {
     let put = Target {
         format: RGBA32F,
         additive: false,
         write: true,
     };
-    let targets: &[Target] = if vertex { &[put, put] } else { &[put] };
+    let targets = vec![put; target_count(features)];
     let desc = PipelineDesc {
         stride: std::mem::size_of::<CornerVertex>() as u32,
         attributes: &[
             POSITION,
             (vk::Format::R32_UINT, 12),
             (vk::Format::R32_UINT, 16),
+            (vk::Format::R32G32B32_SFLOAT, 20),
         ],
         depth: true,
         ..frame_desc(
             "gbuffer",
             "gbuffer.vert",
             "gbuffer.frag",
-            targets,
+            &targets,
             specialization,
         )
     };
     create(ctx, layout, &desc)
 }
 
-/// Records the G-buffer pass; the vertex-radiance target exists only when `vertex` (smooth
-/// meshes are interpolated).
+/// Records the G-buffer pass with the targets `features` need ([`target_count`]).
 #[allow(clippy::too_many_arguments)]
 pub fn record(
     p: &FramePass<'_>,
@@ -58,11 +72,15 @@ pub fn record(
     corners: vk::Buffer,
     corner_count: u32,
     constants: FrameConstants,
-    vertex: bool,
+    features: &Features,
 ) {
+    let count = target_count(features);
     let mut colors = vec![&mut im.gbuf_position];
-    if vertex {
+    if count > 1 {
         colors.push(&mut im.gbuf_vertex);
+    }
+    if count > 2 {
+        colors.push(&mut im.gbuf_normal);
     }
     let mut to_attachment: Vec<_> = colors
         .into_iter()

@@ -18,8 +18,11 @@ resource_set! {
         pub shadow_depth,
         /// G-buffer position + leaf (2W × 2H).
         pub gbuf_position,
-        /// G-buffer vertex-interpolated radiance (1×1 placeholder without smooth meshes).
+        /// G-buffer vertex-interpolated radiance (1×1 placeholder without smooth meshes or
+        /// shading normals: the normal target comes after it).
         pub gbuf_vertex,
+        /// G-buffer interpolated shading normal (1×1 placeholder without OBJ `vn`).
+        pub gbuf_normal,
         /// G-buffer depth.
         pub gbuf_depth,
         /// Splat sums (Σ w·L, Σ w) (1×1 placeholder without flat surfaces).
@@ -43,10 +46,17 @@ impl FrameImages<ImageDesc> {
             shadow_map: shadow("shadow maps", vk::Format::R32_SFLOAT),
             shadow_depth: shadow("shadow depth", DEPTH_FORMAT),
             gbuf_position: frame("G-buffer position", sw, sh, RGBA32F),
-            gbuf_vertex: if features.vertex {
+            // Attachments are positional: the normal target (location 2) needs the vertex
+            // target (location 1) at full size before it.
+            gbuf_vertex: if features.vertex || features.normals {
                 frame("G-buffer vertex radiance", sw, sh, RGBA32F)
             } else {
                 frame("G-buffer vertex radiance (none)", 1, 1, RGBA32F)
+            },
+            gbuf_normal: if features.normals {
+                frame("G-buffer shading normal", sw, sh, RGBA32F)
+            } else {
+                frame("G-buffer shading normal (none)", 1, 1, RGBA32F)
             },
             gbuf_depth: frame("G-buffer depth", sw, sh, DEPTH_FORMAT),
             splat: if features.splat {
