@@ -4,11 +4,14 @@
 //! uniformly from their front, analytic lights and the constant environment as in
 //! [`crate::frame::lights`]. Next-event estimation samples the analytic lights and the area
 //! emitters (power heuristic MIS against BSDF sampling); the environment is reached by BSDF
-//! sampling; Russian roulette ends long paths.
+//! sampling; Russian roulette ends long paths. Shading normals (OBJ `vn`) as in the frame
+//! ([`crate::frame::shading`]): the interpolated normal gives the BSDF's cosines and lobe, the
+//! face normal the front side; light and continued paths must be above both.
 
 use super::sampling::{power_cosine_pdf, sample_power_cosine, sample_triangle, Discrete, Rng};
 use crate::brdf::mirror;
 use crate::frame::lights::{brdf, incident};
+use crate::frame::shading::shading_normal;
 use crate::raycast::RayCaster;
 use crate::scene::{Light, Material, Scene};
 use glam::DVec3;
@@ -36,6 +39,8 @@ pub struct Tracer {
     caster: RayCaster,
     corners: Vec<[DVec3; 3]>,
     normals: Vec<DVec3>,
+    /// Vertex normals of triangles whose mesh has `vn`.
+    shading: Vec<Option<[DVec3; 3]>>,
     areas: Vec<f64>,
     material: Vec<u32>,
     materials: Vec<Material>,
@@ -66,10 +71,12 @@ impl Tracer {
     pub fn new(scene: &Scene, max_bounces: Option<u32>) -> Self {
         let mut corners = Vec::new();
         let mut material = Vec::new();
+        let mut shading = Vec::new();
         for m in &scene.meshes {
-            for (t, &mi) in m.triangles.iter().zip(&m.material) {
+            for (k, (t, &mi)) in m.triangles.iter().zip(&m.material).enumerate() {
                 corners.push(t.map(|i| m.positions[i as usize]));
                 material.push(mi);
+                shading.push(m.normals.get(k).copied());
             }
         }
         let normals: Vec<DVec3> = corners
@@ -102,6 +109,7 @@ impl Tracer {
             caster: RayCaster::from_triangles(corners.clone()),
             corners,
             normals,
+            shading,
             areas,
             material,
             materials: scene.materials.clone(),
@@ -161,9 +169,16 @@ impl Tracer {
     }
 
     /// The direction `wi` (toward where light comes from) a path continues in from a point with
-    /// normal `n` that it reached travelling along `d`; None when the sample falls below the
-    /// surface.
-    fn sample_bsdf(&self, mat: &Material, n: DVec3, d: DVec3, rng: &mut Rng) -> Option<DVec3> {
+    /// shading normal `n` and face normal `g` that it reached travelling along `d`; None when
+    /// the sample falls below either.
+    fn sample_bsdf(
+        &self,
+        mat: &Material,
+        n: DVec3,
+        g: DVec3,
+        d: DVec3,
+        rng: &mut Rng,
+    ) -> Option<DVec3> {
         let p_d = Self::diffuse_probability(mat);
         let (u0, u1, u2) = (rng.uniform(), rng.uniform(), rng.uniform());
         let wi = if u0 < p_d {
@@ -172,20 +187,29 @@ impl Tracer {
             // Light arriving along wi and leaving toward -d peaks when wi mirrors -d.
             sample_power_cosine(mirror(d, n), mat.ns, u1, u2)
         };
-        (wi.dot(n) > 0.0).then_some(wi)
+        (wi.dot(n) > 0.0 && wi.dot(g) > 0.0).then_some(wi)
     }
 
-    /// Direct light at `p` (normal `n`, material `mat`, seen from direction `wo`) from the
-    /// analytic lights and one sampled area-emitter point, with the MIS weight for the latter.
-    fn next_event(&self, p: DVec3, n: DVec3, mat: &Material, wo: DVec3, rng: &mut Rng) -> DVec3 {
-        let origin = p + n * self.eps;
+    /// Direct light at `p` (face normal `g`, shading normal `n`, material `mat`, seen from
+    /// direction `wo`) from the analytic lights and one sampled area-emitter point, with the MIS
+    /// weight for the latter.
+    fn next_event(
+        &self,
+        p: DVec3,
+        g: DVec3,
+        n: DVec3,
+        mat: &Material,
+        wo: DVec3,
+        rng: &mut Rng,
+    ) -> DVec3 {
+        let origin = p + g * self.eps;
         let mut l = DVec3::ZERO;
         for light in &self.lights {
             let Some(inc) = incident(light, p) else {
                 continue;
             };
             let cos = -inc.travel.dot(n);
-            if cos <= 0.0 {
+            if cos <= 0.0 || inc.travel.dot(g) >= 0.0 {
                 continue;
             }
             let dist = match light {
@@ -208,6 +232,7 @@ impl Tracer {
             let cos = wi.dot(n);
             let pdf_light = self.light_pdf(tri, origin, q);
             if cos > 0.0
+                && wi.dot(g) > 0.0
                 && pdf_light > 0.0
                 && !self.caster.occluded(origin, wi, 0.0, r * (1.0 - 1e-9))
             {
@@ -240,11 +265,19 @@ impl Tracer {
                 break;
             };
             let tri = hit.leaf as usize;
-            let n = self.normals[tri];
+            let g = self.normals[tri];
             let wo = -d;
-            if wo.dot(n) <= 0.0 {
+            if wo.dot(g) <= 0.0 {
                 break; // back faces are black
             }
+            let n = match &self.shading[tri] {
+                Some(c) => shading_normal(
+                    c[0] * (1.0 - hit.u - hit.v) + c[1] * hit.u + c[2] * hit.v,
+                    g,
+                    wo,
+                ),
+                None => g,
+            };
             let mat = &self.materials[self.material[tri] as usize];
             let c = &self.corners[tri];
             let p = c[0] * (1.0 - hit.u - hit.v) + c[1] * hit.u + c[2] * hit.v;
@@ -259,10 +292,10 @@ impl Tracer {
             if !self.allowed(bounces) {
                 break;
             }
-            add(bounces, beta * self.next_event(p, n, mat, wo, rng));
+            add(bounces, beta * self.next_event(p, g, n, mat, wo, rng));
             // The path goes on even at the bounce limit: emitters and the environment it reaches
             // next still count `bounces` reflections.
-            let Some(wi) = self.sample_bsdf(mat, n, d, rng) else {
+            let Some(wi) = self.sample_bsdf(mat, n, g, d, rng) else {
                 break;
             };
             let pdf = self.bsdf_pdf(mat, n, -wi, wo);
@@ -280,8 +313,8 @@ impl Tracer {
             if beta.max_element() <= 0.0 {
                 break;
             }
-            prev = Some((pdf, p + n * self.eps));
-            o = p + n * self.eps;
+            prev = Some((pdf, p + g * self.eps));
+            o = p + g * self.eps;
             d = wi;
         }
         out
