@@ -181,6 +181,29 @@ fn lenient_input_is_accepted_with_a_warning_each() {
     assert_eq!(grey.kd.to_array(), [0.5; 3], "one-value Kd is grey");
 }
 
+#[test]
+fn unusable_normals_fall_back_to_the_face_normal_with_one_warning() {
+    let s = load("normals.toml");
+    let w: Vec<&String> = s.warnings.iter().filter(|w| w.contains("`vn`")).collect();
+    assert_eq!(w.len(), 1, "{:?}", s.warnings);
+    assert!(
+        w[0].contains("normals.obj: 3 triangles have unusable `vn`")
+            && w[0].contains("first: line 22"),
+        "{}",
+        w[0]
+    );
+    // The quad's two triangles keep their (normalized) `vn`; the face without `vn` and the
+    // three with unusable ones get their face normal at every corner.
+    let m = &s.meshes[0];
+    assert_eq!((m.triangles.len(), m.normals.len()), (6, 6));
+    let faceted: Vec<bool> = (0..6)
+        .map(|t| m.normals[t] == [m.face_normal(t); 3])
+        .collect();
+    assert_eq!(faceted, [false, false, true, true, true, true]);
+    let tilted = glam::DVec3::new(0.2, 0.9, 0.1).normalize();
+    assert!(m.normals[0].iter().any(|n| (*n - tilted).length() < 1e-7));
+}
+
 mod common;
 
 /// The same Cornell box in three units (no `element_size` in the files, so the relative
