@@ -163,7 +163,7 @@ impl Surfaces {
             let mesh = &scene.meshes[e.mesh as usize];
             let shaded = !mesh.normals.is_empty();
             let corner_normal = if shaded {
-                corner_normals(mesh, e.triangle as usize, &e.corners)
+                normals_at(mesh, e.triangle as usize, &e.corners)
             } else {
                 [leaf.normal; 3]
             };
@@ -227,7 +227,7 @@ impl Surfaces {
 
 /// `mesh`'s vertex normals of triangle `t` interpolated (barycentrically, not normalized) to
 /// `points` on it.
-fn corner_normals(mesh: &crate::scene::Mesh, t: usize, points: &[DVec3; 3]) -> [DVec3; 3] {
+fn normals_at(mesh: &crate::scene::Mesh, t: usize, points: &[DVec3; 3]) -> [DVec3; 3] {
     let [a, b, c] = mesh.triangles[t].map(|v| mesh.positions[v as usize]);
     let n = mesh.normals[t];
     let cross = (b - a).cross(c - a);
