@@ -381,7 +381,9 @@ fn glossy_cornell_box_at_low_resolution() {
     s.camera.height = 32;
     let truth = path_traced(&s, 2048);
     let bounds = Bounds {
-        rel_rmse: 0.135,
+        // Not tightened to the 0.120 measured with shading normals: the reference's noise
+        // (0.036 at 2048 spp) must stay under a fifth of the bound.
+        rel_rmse: 0.19,
         mean_bias: 0.01,
         indirect_rmse: 0.15,
         indirect_median: Some(0.09),
