@@ -33,6 +33,10 @@
 // Link records (src/gpu/layout.rs GpuLink): rows in the low bits, combo halves above.
 #define AR_LINK_ROW_BITS 22u
 
+// Which I_ex image a global draw's senders live in (src/gpu/tables.rs sender_image).
+#define AR_SENDER_LEAF 0u
+#define AR_SENDER_EVEN 1u
+#define AR_SENDER_ODD 2u
 #define AR_MODE_BOTH 0u
 #define AR_MODE_REFLECT 1u
 #define AR_MODE_ANTIRADIANCE 2u
@@ -138,7 +142,8 @@ layout(push_constant) uniform PassConstants {
     uint flags;
     vec4 environment;  // rgb: environment radiance (scaled); a: source scale (a power of two)
     uint grid_rows;    // nv: a row stores its bins column by column of the nu x nv grid
-    uvec3 pad;
+    uint sender;       // global pass: the I_ex image of the draw's senders (AR_SENDER_*)
+    uvec2 pad;
 } pc;
 
 // Position of a bin within its table row: bin iv*nu + iu is stored at iu*nv + iv (one line per

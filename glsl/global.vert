@@ -34,9 +34,11 @@ void main() {
     // Flat outputs come from the first vertex of a line; the second one skips the fetches.
     if ((gl_VertexIndex & 1) == 0) {
         ivec2 s = ar_texel(sender, bin);
-        // Leaves and the two cluster parities live in separate images (zero elsewhere).
-        vec3 i_ex = texelFetch(leaf_ex, s, 0).rgb + texelFetch(cluster_even, s, 0).rgb
-            + texelFetch(cluster_odd, s, 0).rgb;
+        // Leaves and the two cluster parities live in separate images; each draw's senders
+        // live in one of them (links are drawn by sender image), so one fetch per line.
+        vec3 i_ex = pc.sender == AR_SENDER_LEAF ? texelFetch(leaf_ex, s, 0).rgb
+            : pc.sender == AR_SENDER_EVEN ? texelFetch(cluster_even, s, 0).rgb
+            : texelFetch(cluster_odd, s, 0).rgb;
         sent = i_ex * form_factor;
     } else {
         sent = vec3(0.0);

@@ -8,14 +8,24 @@
 //! tracer). So a face with some corner of its own connected surface behind its plane keeps the
 //! paper's rule (light from behind ignored); flat thin walls and rooms whose faces look inward
 //! (their backs face the world outside) block it.
+//!
+//! A closed surface modelled inside out (faces looking inward, as MNRoom's table) with nothing
+//! inside it is a solid too: every line through it enters at a back and leaves at a front, whose
+//! antiradiance already blocks it, and its inside holds nothing to be lit. Blocking at its backs
+//! as well cancels twice across a thin slab, through links between faces a few millimetres apart
+//! (MNRoom: the floor under the table +100–225% in indirect light). A room (closed, looking
+//! inward) keeps blocking: the camera, a light or other geometry lies inside it.
 
-use crate::scene::Scene;
+use crate::scene::{Light, Scene};
 use glam::DVec3;
 use std::collections::HashMap;
 
 /// Per mesh, per triangle: true when a corner of the triangle's connected surface (triangles
 /// sharing edges at exact coordinates, as [`crate::system::closed_surfaces`] compares them) lies
-/// behind its plane, by more than [`crate::plan::occlusion::TOLERANCE`] of the scene's size.
+/// behind its plane, by more than [`crate::plan::occlusion::TOLERANCE`] of the scene's size; or
+/// when the surface is closed (every edge shared by exactly two of its triangles), a corner lies
+/// in front of the triangle's plane, and nothing (a vertex, the camera, a point or spot light)
+/// lies inside the surface's bounding box.
 pub fn solid_triangles(scene: &Scene) -> Vec<Vec<bool>> {
     let key = |p: DVec3| [p.x + 0.0, p.y + 0.0, p.z + 0.0].map(f64::to_bits);
     let tris: Vec<[DVec3; 3]> = scene
@@ -27,7 +37,7 @@ pub fn solid_triangles(scene: &Scene) -> Vec<Vec<bool>> {
                 .map(|t| t.map(|i| m.positions[i as usize]))
         })
         .collect();
-    // Union-find over triangles sharing an (undirected) edge.
+    // Union-find over triangles sharing an (undirected) edge; uses per edge.
     let mut parent: Vec<usize> = (0..tris.len()).collect();
     fn find(p: &mut [usize], mut i: usize) -> usize {
         while p[i] != i {
@@ -36,7 +46,7 @@ pub fn solid_triangles(scene: &Scene) -> Vec<Vec<bool>> {
         }
         i
     }
-    let mut first: HashMap<([u64; 3], [u64; 3]), usize> = HashMap::new();
+    let mut first: HashMap<([u64; 3], [u64; 3]), (usize, u32)> = HashMap::new();
     for (t, c) in tris.iter().enumerate() {
         for i in 0..3 {
             let (a, b) = (key(c[i]), key(c[(i + 1) % 3]));
@@ -44,19 +54,19 @@ pub fn solid_triangles(scene: &Scene) -> Vec<Vec<bool>> {
                 continue;
             }
             let e = if a < b { (a, b) } else { (b, a) };
-            match first.get(&e) {
-                Some(&o) => {
-                    let (x, y) = (find(&mut parent, o), find(&mut parent, t));
+            match first.get_mut(&e) {
+                Some((o, uses)) => {
+                    *uses += 1;
+                    let (x, y) = (find(&mut parent, *o), find(&mut parent, t));
                     parent[x.max(y)] = x.min(y);
                 }
                 None => {
-                    first.insert(e, t);
+                    first.insert(e, (t, 1));
                 }
             }
         }
     }
-    // Per component, its corners: a triangle with one of them behind its plane is part of a
-    // surface that wraps around behind it (a solid, open or closed, or a box without a bottom).
+    // Per component: its corners, and whether it is closed.
     let (lo, hi) = scene.bounds();
     let eps = (hi - lo).length().max(1e-300) * crate::plan::occlusion::TOLERANCE;
     let mut corners: HashMap<usize, Vec<DVec3>> = HashMap::new();
@@ -64,6 +74,14 @@ pub fn solid_triangles(scene: &Scene) -> Vec<Vec<bool>> {
         let r = find(&mut parent, t);
         corners.entry(r).or_default().extend_from_slice(c);
     }
+    let mut closed: HashMap<usize, bool> = corners.keys().map(|&r| (r, true)).collect();
+    for &(t, uses) in first.values() {
+        if uses != 2 {
+            let r = find(&mut parent, t);
+            closed.insert(r, false);
+        }
+    }
+    let empty = empty_closed_surfaces(scene, &corners, &closed, eps);
     let mut examined = 0u64;
     let mut out = Vec::with_capacity(scene.meshes.len());
     let mut t = 0;
@@ -76,10 +94,58 @@ pub fn solid_triangles(scene: &Scene) -> Vec<Vec<bool>> {
             let all = &corners[&r];
             examined += all.len() as u64;
             // Past the budget, keep the paper's rule (light from behind ignored).
-            v.push(examined > PAIR_BUDGET || all.iter().any(|&p| n.dot(p - c[0]) < -eps));
+            let behind = || all.iter().any(|&p| n.dot(p - c[0]) < -eps);
+            let inside_out = || empty.contains(&r) && all.iter().any(|&p| n.dot(p - c[0]) > eps);
+            v.push(examined > PAIR_BUDGET || behind() || inside_out());
             t += 1;
         }
         out.push(v);
+    }
+    out
+}
+
+/// The closed surfaces (by component root) whose bounding box, shrunk by `eps`, holds no vertex
+/// (of another surface, or a concave corner of its own), no camera eye and no point or spot light. Past [`PAIR_BUDGET`] vertex
+/// tests the rest count as occupied (they keep blocking at their backs).
+fn empty_closed_surfaces(
+    scene: &Scene,
+    corners: &HashMap<usize, Vec<DVec3>>,
+    closed: &HashMap<usize, bool>,
+    eps: f64,
+) -> std::collections::HashSet<usize> {
+    let mut others: Vec<DVec3> = scene
+        .meshes
+        .iter()
+        .flat_map(|m| m.positions.iter().copied())
+        .collect();
+    others.push(scene.camera.eye);
+    others.extend(scene.lights.iter().filter_map(|l| match l {
+        Light::Point { position, .. } | Light::Spot { position, .. } => Some(*position),
+        _ => None,
+    }));
+    let mut tests = 0u64;
+    let mut out = std::collections::HashSet::new();
+    for (&r, c) in corners {
+        if !closed[&r] {
+            continue;
+        }
+        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        for p in c {
+            lo = lo.min(*p);
+            hi = hi.max(*p);
+        }
+        let (lo, hi) = (lo + DVec3::splat(eps), hi - DVec3::splat(eps));
+        tests += others.len() as u64;
+        if tests > PAIR_BUDGET {
+            break;
+        }
+        // The surface's own corners are on its box's boundary, so they fall outside the shrunk box.
+        if !others
+            .iter()
+            .any(|p| p.cmpgt(lo).all() && p.cmplt(hi).all())
+        {
+            out.insert(r);
+        }
     }
     out
 }
@@ -126,9 +192,39 @@ mod tests {
         let o = DVec3::splat(-5.0);
         let p = vec![o, o + DVec3::X, o + DVec3::Y];
         s.add_mesh("open", p, vec![[0, 1, 2]], 0);
+        // Something inside the room: a small triangle.
+        let c = DVec3::splat(5.5);
+        let p = vec![c, c + 0.1 * DVec3::X, c + 0.1 * DVec3::Y];
+        s.add_mesh("content", p, vec![[0, 1, 2]], 0);
+        cube(&mut s, "inside out", DVec3::new(-3.0, 0.0, 0.0), true);
+        s.camera.eye = DVec3::splat(-20.0);
         let solid = solid_triangles(&s);
         assert!(solid[0].iter().all(|&b| b), "outward cube: a solid");
-        assert!(solid[1].iter().all(|&b| !b), "inward cube: a room");
+        assert!(
+            solid[1].iter().all(|&b| !b),
+            "inward cube with something in it: a room"
+        );
         assert!(!solid[2][0], "a lone triangle is open");
+        assert!(
+            solid[4].iter().all(|&b| b),
+            "empty inward cube: a solid inside out"
+        );
+        // The camera inside makes it a room.
+        s.camera.eye = DVec3::new(-2.5, 0.5, 0.5);
+        assert!(
+            solid_triangles(&s)[4].iter().all(|&b| !b),
+            "camera inside: a room"
+        );
+        // Open (one face missing): light entering at a back could leave by the gap.
+        let mut s2 = Scene::empty();
+        s2.add_material(crate::scene::Material::diffuse("grey", 0.5));
+        cube(&mut s2, "inside out", DVec3::ZERO, true);
+        s2.meshes[0].triangles.truncate(10);
+        s2.meshes[0].material.truncate(10);
+        s2.camera.eye = DVec3::splat(-20.0);
+        assert!(
+            solid_triangles(&s2)[0].iter().all(|&b| !b),
+            "open inward box blocks"
+        );
     }
 }

@@ -28,8 +28,11 @@ pub struct PassConstants {
     /// Rows `nv` of the bins' grid: a row stores its bins column by column of the grid
     /// ([`super::tables::TableLayout::position`]).
     pub grid_rows: u32,
+    /// Global pass: the I_ex image the draw's senders live in
+    /// ([`super::tables::sender_image`]); zero elsewhere.
+    pub sender: u32,
     /// Padding to 16 bytes.
-    pub pad: [u32; 3],
+    pub pad: [u32; 2],
 }
 
 /// `PassConstants::flags` bit: tables are float16; shaders round stores to nearest.
@@ -454,6 +457,7 @@ mod tests {
                 "flags",
                 "environment",
                 "grid_rows",
+                "sender",
                 "pad"
             ]
         );
@@ -600,6 +604,19 @@ mod tests {
         }
         assert_eq!(spec::COUNT, 8);
         assert!(COMMON.contains(&format!("#define AR_FLAG_HALF {FLAG_HALF}u\n")));
+        use crate::gpu::tables::{SENDER_EVEN, SENDER_LEAF, SENDER_ODD};
+        for (name, value) in [
+            ("LEAF", SENDER_LEAF),
+            ("EVEN", SENDER_EVEN),
+            ("ODD", SENDER_ODD),
+        ] {
+            let line = format!("#define AR_SENDER_{name} {value}u\n");
+            assert!(
+                COMMON.contains(&line),
+                "common.glsl lacks `{}`",
+                line.trim()
+            );
+        }
         assert!(COMMON.contains(&format!(
             "#define AR_LOBE_REFINE {}u\n",
             crate::gpu::pack::LOBE_REFINE

@@ -4,13 +4,13 @@
 use super::context::Context;
 use super::diagnostics::BlendRounding;
 use super::layout::{mode, PassConstants, FLAG_HALF};
-use super::memory::{Image, MemoryReport};
-use super::pack::{decode, encode};
+use super::memory::MemoryReport;
+use super::pack::encode;
 use super::passes::{self, Pass, PipelineSpec, SolverPipelines};
 use super::pipelines::Layouts;
 use super::profiler::Profiler;
 use super::reduce::{Reducer, Start};
-use super::resources::{ResourcePlan, Resources, SolverImages};
+use super::resources::{ResourcePlan, Resources};
 use crate::error::{Error, Result};
 use crate::plan::range::Range;
 use crate::plan::Features;
@@ -21,6 +21,8 @@ use crate::system::System;
 use ash::vk;
 use glam::DVec3;
 use std::sync::Arc;
+
+mod transfer;
 
 /// GPU solver options.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -554,106 +556,6 @@ impl GpuSolver {
     pub fn read_timings(&mut self) -> Result<&[(String, f64)]> {
         self.timings = self.profiler.results(&self.ctx)?;
         Ok(&self.timings)
-    }
-
-    fn read_texels(
-        &mut self,
-        pick: impl FnOnce(&mut SolverImages<Image>) -> &mut Image,
-    ) -> Result<Vec<[f32; 4]>> {
-        let img = pick(&mut self.res.images);
-        Ok(decode(img.format, &img.read()?))
-    }
-
-    /// Reads I_ex (leaves + clusters) back as a table.
-    pub fn read_i_ex(&mut self) -> Result<Table> {
-        let p = self.parity;
-        let leaf = self.read_texels(|im| im.leaf_ex_mut(p))?;
-        let even = self.read_texels(|im| &mut im.cluster_ex)?;
-        let odd = self.read_texels(|im| &mut im.cluster_ex_odd)?;
-        // Each row is valid in one of the three images and zero in the others.
-        let sum: Vec<[f32; 4]> = leaf
-            .iter()
-            .zip(even.iter().zip(&odd))
-            .map(|(a, (b, c))| {
-                [
-                    a[0] + b[0] + c[0],
-                    a[1] + b[1] + c[1],
-                    a[2] + b[2] + c[2],
-                    0.0,
-                ]
-            })
-            .collect();
-        Ok(self.unscale(self.res.layout().to_table(&sum)))
-    }
-
-    /// Reads I_total back.
-    pub fn read_i_total(&mut self) -> Result<Table> {
-        let t = self.read_texels(|im| &mut im.i_total)?;
-        Ok(self.unscale(self.res.layout().to_table(&t)))
-    }
-
-    /// Replaces I_total with `table` (unscaled): a method that computes its display table
-    /// itself (progressive refinement) draws it with the same frame.
-    pub fn upload_i_total(&mut self, table: &Table) -> Result<()> {
-        let l = *self.res.layout();
-        let mut scaled = table.clone();
-        scaled.data.iter_mut().for_each(|v| *v *= self.scale);
-        let bytes = encode(self.res.plan.format, &l.from_table(&scaled));
-        self.res.images.i_total.upload(&bytes)
-    }
-
-    /// Replaces I_ex with `table` (unscaled, one row per node of `sys`, clusters as pull makes
-    /// them): a warm start from the previous frame's solution when objects moved (§3.3). Leaf
-    /// rows go to the current leaf image, cluster rows to their depth parity's image.
-    pub fn upload_i_ex(&mut self, sys: &System, table: &Table) -> Result<()> {
-        let l = *self.res.layout();
-        let zero = || Table::zeros(table.rows(), table.bins);
-        let (mut leaf, mut even, mut odd) = (zero(), zero(), zero());
-        for r in 0..table.rows() {
-            let dst = if sys.leaf_slot[r] != u32::MAX {
-                &mut leaf
-            } else if self.depth_parity[r] {
-                &mut odd
-            } else {
-                &mut even
-            };
-            for (d, v) in dst.row_mut(r).iter_mut().zip(table.row(r)) {
-                *d = *v * self.scale;
-            }
-        }
-        let p = self.parity;
-        let format = self.res.plan.format;
-        let im = &mut self.res.images;
-        im.leaf_ex_mut(p)
-            .upload(&encode(format, &l.from_table(&leaf)))?;
-        im.cluster_ex.upload(&encode(
-            super::resources::CLUSTER_FORMAT,
-            &l.from_table(&even),
-        ))?;
-        im.cluster_ex_odd.upload(&encode(
-            super::resources::CLUSTER_FORMAT,
-            &l.from_table(&odd),
-        ))
-    }
-
-    /// Reads the pushed incident radiance back (push leaves odd depths' rows in the L_in image).
-    pub fn read_l_push(&mut self) -> Result<Table> {
-        let layout = *self.res.layout();
-        let even = layout.to_table(&self.read_texels(|im| &mut im.l_push)?);
-        let odd = layout.to_table(&self.read_texels(|im| &mut im.l_in)?);
-        let mut t = even;
-        for (r, node) in self.depth_parity.iter().enumerate() {
-            if *node {
-                t.row_mut(r).copy_from_slice(odd.row(r));
-            }
-        }
-        Ok(self.unscale(t))
-    }
-
-    fn unscale(&self, mut t: Table) -> Table {
-        let inv = 1.0 / self.scale;
-        t.data.iter_mut().for_each(|v| *v *= inv);
-        t
     }
 
     /// Makes I_total readable by shaders (a frame's passes, or the host's own) in `cmd`.

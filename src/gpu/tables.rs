@@ -153,11 +153,11 @@ impl TableLayout {
 /// Everything the passes draw, built once from the [`System`].
 #[derive(Debug, Clone, Default)]
 pub struct DrawData {
-    /// One per link (global), ordered by run count: the links of `link_buckets[k]` have
-    /// `k`+1 runs and are drawn with `2(k+1)` vertices each.
+    /// One per link (global), ordered by the sender's image ([`sender_image`]), then by run
+    /// count: the links of a bucket with `k` runs are drawn with `2k` vertices each.
     pub links: Vec<GpuLink>,
-    /// `(runs, first link, link count)` of each draw of the global pass.
-    pub link_buckets: Vec<(u32, u32, u32)>,
+    /// `(sender image, runs, first link, link count)` of each draw of the global pass.
+    pub link_buckets: Vec<(u32, u32, u32, u32)>,
     /// What links with the same central bin, filter layer and receiver runs share.
     pub combos: Vec<GpuCombo>,
     /// Receiver bin runs of the combos ([`pack_run`]).
@@ -184,6 +184,25 @@ pub struct DrawData {
     /// Runs of all leaf rows (irradiance step).
     pub leaf_quads: Vec<QuadInstance>,
 }
+
+/// Which I_ex image holds row `row` of `sys`: [`SENDER_LEAF`] (the leaves' ping-pong pair),
+/// [`SENDER_EVEN`] or [`SENDER_ODD`] (clusters by depth parity, as pull writes them).
+pub fn sender_image(sys: &System, row: u32) -> u32 {
+    if sys.leaf_slot[row as usize] != u32::MAX {
+        SENDER_LEAF
+    } else if sys.hierarchy.nodes[row as usize].depth % 2 == 1 {
+        SENDER_ODD
+    } else {
+        SENDER_EVEN
+    }
+}
+
+/// [`sender_image`]: a leaf's I_ex (`AR_SENDER_LEAF` in `glsl/common.glsl`).
+pub const SENDER_LEAF: u32 = 0;
+/// [`sender_image`]: a cluster at even depth (`AR_SENDER_EVEN`).
+pub const SENDER_EVEN: u32 = 1;
+/// [`sender_image`]: a cluster at odd depth (`AR_SENDER_ODD`).
+pub const SENDER_ODD: u32 = 2;
 
 /// Maximal runs `[first, end)` of consecutive positions (in `layout`) of the bins of a filter
 /// row (`(bin, weight)`) that `keep` accepts.
@@ -318,7 +337,7 @@ impl DrawData {
         class_layer: &[u16],
     ) -> Result<(
         Vec<GpuLink>,
-        Vec<(u32, u32, u32)>,
+        Vec<(u32, u32, u32, u32)>,
         Vec<GpuCombo>,
         Vec<u32>,
         u64,
@@ -381,24 +400,27 @@ impl DrawData {
                 runs.len()
             )));
         }
-        // Order the records by run count: one draw per count, `2·runs` vertices per link.
+        // Order the records by the sender's image, then run count: one draw per (image, count),
+        // `2·runs` vertices per link, and the vertex shader fetches I_ex from that image only.
+        let image = |i: u32| sender_image(sys, sys.links.links[i as usize].sender);
         let mut order: Vec<u32> = (0..per_link.len() as u32).collect();
-        order.sort_by_key(|&i| per_link[i as usize].1 & 0xff);
-        let mut buckets: Vec<(u32, u32, u32)> = Vec::new();
+        order.sort_by_key(|&i| (image(i), per_link[i as usize].1 & 0xff));
+        let mut buckets: Vec<(u32, u32, u32, u32)> = Vec::new();
         let links: Vec<GpuLink> = order
             .iter()
             .enumerate()
             .map(|(k, &i)| {
                 let l = &sys.links.links[i as usize];
                 let (combo, count) = (per_link[i as usize].0, per_link[i as usize].1 & 0xff);
+                let source = image(i);
                 match buckets.last_mut() {
-                    Some(b) if b.0 == count => b.2 += 1,
-                    _ => buckets.push((count, k as u32, 1)),
+                    Some(b) if b.0 == source && b.1 == count => b.3 += 1,
+                    _ => buckets.push((source, count, k as u32, 1)),
                 }
                 GpuLink::new(l.receiver, l.sender, combo, l.form_factor as f32)
             })
             .collect();
-        buckets.retain(|b| b.0 > 0);
+        buckets.retain(|b| b.1 > 0);
         Ok((links, buckets, combos, runs, fragments, lines))
     }
 }

@@ -2,7 +2,8 @@
 //! bins its cone filter reaches and the receiver reads — into the receiver's row of L_in; the
 //! sender's I_ex times the form factor is fetched once per line, the fragment shader weights it
 //! by the filter table, and additive blending sums all links of a receiver. Links are drawn in
-//! one draw per run count (`DrawData::link_buckets`).
+//! one draw per sender image and run count (`DrawData::link_buckets`), so the vertex shader
+//! fetches I_ex from one image instead of summing the leaves' and both cluster parities'.
 
 use super::{begin_rendering, end_rendering, Load, Pass, PipelineSpec};
 use crate::error::Result;
@@ -51,8 +52,17 @@ pub fn record(p: &Pass<'_>, res: &mut Resources, cur: usize) {
         ],
     );
     begin_rendering(p.ctx, p.cmd, &[(&im.l_in, Load::Clear)]);
-    p.bind(&p.pipes.global, im.l_in.extent, res.plan.layout.bins);
-    for &(runs, first, count) in &res.plan.draw.link_buckets {
+    let mut bound = None;
+    for &(sender, runs, first, count) in &res.plan.draw.link_buckets {
+        if bound != Some(sender) {
+            p.bind_sender(
+                &p.pipes.global,
+                im.l_in.extent,
+                res.plan.layout.bins,
+                sender,
+            );
+            bound = Some(sender);
+        }
         p.draw_range(res.buffers.links.raw, 2 * runs, first, count);
     }
     end_rendering(p.ctx, p.cmd);

@@ -279,10 +279,22 @@ impl Pass<'_> {
     /// Binds `pipeline`, the set and the push constants for a target of `extent` with rows
     /// `quad_width` texels wide.
     pub fn bind(&self, pipeline: &Owned<vk::Pipeline>, extent: vk::Extent2D, quad_width: u32) {
+        self.bind_sender(pipeline, extent, quad_width, 0);
+    }
+
+    /// As [`Pass::bind`], with the global pass's sender image ([`PassConstants::sender`]).
+    pub fn bind_sender(
+        &self,
+        pipeline: &Owned<vk::Pipeline>,
+        extent: vk::Extent2D,
+        quad_width: u32,
+        sender: u32,
+    ) {
         let c = PassConstants {
             target_width: extent.width,
             target_height: extent.height,
             quad_width,
+            sender,
             ..self.constants
         };
         bind_with_constants(
