@@ -121,6 +121,12 @@ impl Backend for CpuBackend {
         Ok(())
     }
 
+    fn follow(&mut self, prep: &Prepared) -> Result<bool> {
+        // The solver reads the system at every iteration: only the ray caster holds geometry.
+        self.caster = RayCaster::new(&prep.system);
+        Ok(true)
+    }
+
     fn i_ex(&mut self) -> Result<Table> {
         Ok(self.state().i_ex.clone())
     }

@@ -102,7 +102,9 @@ impl Engine {
     /// registered with [`Scene::add_object`]) at `m` (object-to-world) for the next
     /// [`Engine::update`]. Only objects marked moving (keyframes, `moving = true`) may move.
     pub fn set_object_transform(&mut self, object: usize, m: DMat4) -> Result<()> {
-        self.next_scene().set_object_transform(object, m)
+        self.next_scene().set_object_transform(object, m)?;
+        self.placed = true;
+        Ok(())
     }
 
     /// Makes the engine follow what moved since the last update (no-op when nothing did):
@@ -132,21 +134,38 @@ impl Engine {
             .iter()
             .zip(&self.prep.scene.meshes)
             .all(|(a, b)| a.positions == b.positions);
+        // Objects moved along their keyframes: the bounded link mesh follows them (nothing
+        // relinked, the nodes and rows stay, the solution carries over row for row). A pose a
+        // host set may lie outside the bound: prepared anew, as is a scene without a bound.
+        let followed = if still || self.placed {
+            None
+        } else {
+            self.prep.moved(&scene, &self.options)?
+        };
+        let bounded = followed.is_some();
         let (mut prep, warm) = if still {
             (self.prep.relit(&scene, &self.options)?, Some(old))
+        } else if let Some(prep) = followed {
+            (prep, Some(old))
         } else {
             let prep = Prepared::new(&scene, &self.options, memory, &Silent)?;
             let warm = carry_over(&self.prep.system, &prep.system, &old);
             (prep, warm)
         };
-        self.relinked = !still;
+        self.relinked = !still && !bounded;
+        self.placed = false;
         let prepare_ms = ms(t);
         let t1 = Instant::now();
         // A camera a host set (Engine::set_camera) stays: the re-prepared scene has its own.
         prep.camera = self.prep.camera.clone();
-        let mut backend = backend::create(&self.options, &mut prep, ctx)?;
+        // A backend that can follow the moved system in place keeps its tables (CPU); the
+        // others are made anew for it.
+        if !(bounded && self.backend.follow(&prep)?) {
+            self.backend = backend::create(&self.options, &mut prep, ctx)?;
+        }
         let backend_ms = ms(t1);
         let t2 = Instant::now();
+        let backend = &mut self.backend;
         backend.prepare_lights(&mut prep)?;
         let lights_ms = ms(t2);
         let t3 = Instant::now();
@@ -154,7 +173,6 @@ impl Engine {
             Some(table) => backend.warm_start(&prep, table)?,
             None => backend.initialize(&prep)?,
         }
-        self.backend = backend;
         self.prep = prep;
         self.update_times = UpdateTimes {
             prepare_ms,
