@@ -74,7 +74,7 @@ fn frames_against_scratch(o: &Options, frames: usize, fps: f64) -> Vec<f64> {
     let mut errors = Vec::new();
     for (r, (time, image)) in records.iter().zip(&images).skip(1) {
         assert_eq!(r.iterations, 4, "the scene's iterations_per_frame");
-        let scratch = Engine::new(&scene.at(*time), o, &Silent)
+        let scratch = Engine::new(&scene.at(*time).still(), o, &Silent)
             .unwrap()
             .render(&Silent)
             .unwrap();
@@ -86,8 +86,11 @@ fn frames_against_scratch(o: &Options, frames: usize, fps: f64) -> Vec<f64> {
         errors.push(e);
         if r.frame + 1 == frames {
             // Control: the same 4 iterations from the initial state instead of the previous
-            // frame's solution must be further off, or the bound would not test the warm start.
-            let mut cold = Engine::new(&scene.at(*time), o, &Silent).unwrap();
+            // frame's solution must be further off. Both carry the difference between the
+            // bounded mesh's hierarchy (the block its own subtree) and the still scene's, 0.006
+            // on the CPU; the warm start against the same links is checked in
+            // `bounded_updates_do_not_relink` (0.0005 against 0.0146 cold).
+            let mut cold = Engine::new(&scene.at(*time).still(), o, &Silent).unwrap();
             cold.initialize().unwrap();
             cold.iterate(r.iterations).unwrap();
             let c = rmse_over_mean(&cold.draw().unwrap(), &scratch.image);
@@ -95,17 +98,16 @@ fn frames_against_scratch(o: &Options, frames: usize, fps: f64) -> Vec<f64> {
                 "  control: {} iterations from the initial state: RMSE/mean {c:.4}",
                 r.iterations
             );
-            assert!(
-                c > 2.0 * e,
-                "cold start {c} is not worse than the warm start {e}"
-            );
+            assert!(c > e, "cold start {c} is not worse than the warm start {e}");
         }
     }
     errors
 }
 
 /// Every animated frame at 6 fps (the block moves 4 cm and turns 2.5° per frame) within 0.05
-/// RMSE/mean of `render --time`. Measured (CPU): see the test output; the bound is the issue's.
+/// RMSE/mean of `render --time` (the still scene at that time, from scratch). Measured (CPU,
+/// bounded link mesh): 0.0061 and 0.0061, of which 0.0060 is the bounded mesh's hierarchy
+/// against the still scene's (the same at rest); the bound is the issue's.
 #[test]
 fn cpu_frames_match_render_at_their_time() {
     let errors = frames_against_scratch(&options(BackendKind::Cpu), 3, 6.0);
@@ -124,6 +126,77 @@ fn gpu_frames_match_render_at_their_time() {
         assert!(*e < 0.05, "frame error {e} (all: {errors:?})");
     }
     common::assert_clean(o.context.as_ref().unwrap());
+}
+
+/// The bounded link mesh (§3.3): the keyframed block is linked once for its whole motion, so
+/// updates follow it without relinking — the same link pairs at every frame, as many as the
+/// bound made — and a warm-started frame is close to the converged solution of the same
+/// links, far closer than as many iterations from the initial state. A pose a host sets
+/// outside the keyframes is prepared anew (relinked).
+#[test]
+fn bounded_updates_do_not_relink() {
+    let scene = bundled("cornell-box-moving.toml");
+    let o = options(BackendKind::Cpu);
+    let mut engine = Engine::new(&scene, &o, &Silent).unwrap();
+    engine.render(&Silent).unwrap();
+    let sys = &engine.prepared().system;
+    let bound = sys
+        .bound
+        .as_ref()
+        .expect("a keyframed scene is linked for its motion");
+    let pairs: Vec<(u32, u32)> = sys
+        .links
+        .links
+        .iter()
+        .map(|l| (l.receiver, l.sender))
+        .collect();
+    let still = Engine::new(&scene.still(), &o, &Silent).unwrap();
+    println!(
+        "links: bounded {} ({} touch the moving block, {} sampled poses), still at t = 0: {}",
+        pairs.len(),
+        bound.moving_links.len(),
+        bound.times.len(),
+        still.prepared().system.links.len()
+    );
+    let n = engine.prepared().settings.iterations_per_frame;
+    for t in [0.2, 0.4, 1.3] {
+        engine.set_time(t).unwrap();
+        engine.update().unwrap();
+        assert!(!engine.relinked() && engine.warm_started(), "t = {t}");
+        let sys = &engine.prepared().system;
+        let now: Vec<(u32, u32)> = sys
+            .links
+            .links
+            .iter()
+            .map(|l| (l.receiver, l.sender))
+            .collect();
+        assert_eq!(now, pairs, "t = {t}: the link set changed");
+        let u = engine.update_times();
+        println!(
+            "t = {t}: update {:.0} ms (follow {:.0}, backend {:.0}, shadow maps and direct light {:.0}, carry {:.0})",
+            u.total_ms, u.prepare_ms, u.backend_ms, u.lights_ms, u.carry_ms
+        );
+        engine.iterate(n).unwrap();
+    }
+    // At the last time: the warm frame against the same links converged (16 more iterations),
+    // and the control, n iterations from the initial state.
+    let warm = engine.draw().unwrap();
+    engine.iterate(16).unwrap();
+    let converged = engine.draw().unwrap();
+    engine.initialize().unwrap();
+    engine.iterate(n).unwrap();
+    let cold = engine.draw().unwrap();
+    let (w, c) = (
+        rmse_over_mean(&warm, &converged),
+        rmse_over_mean(&cold, &converged),
+    );
+    println!("t = 1.3 against the same links converged: warm start {w:.4}, cold start {c:.4}");
+    assert!(w < 0.05 && c > 2.0 * w, "warm {w}, cold {c}");
+    // A host's pose outside the keyframes: prepared anew for it.
+    let m = scene.objects[1].transform * DMat4::from_translation(DVec3::new(0.0, 0.2, 0.0));
+    engine.set_object_transform(1, m).unwrap();
+    engine.update().unwrap();
+    assert!(engine.relinked());
 }
 
 /// A static scene: setting a time and updating changes nothing — not relinked, the same links,
