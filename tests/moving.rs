@@ -86,19 +86,25 @@ fn frames_against_scratch(o: &Options, frames: usize, fps: f64) -> Vec<f64> {
         errors.push(e);
         if r.frame + 1 == frames {
             // Control: the same 4 iterations from the initial state instead of the previous
-            // frame's solution must be further off. Both carry the difference between the
-            // bounded mesh's hierarchy (the block its own subtree) and the still scene's, 0.006
-            // on the CPU; the warm start against the same links is checked in
-            // `bounded_updates_do_not_relink` (0.0005 against 0.0146 cold).
-            let mut cold = Engine::new(&scene.at(*time).still(), o, &Silent).unwrap();
-            cold.initialize().unwrap();
-            cold.iterate(r.iterations).unwrap();
-            let c = rmse_over_mean(&cold.draw().unwrap(), &scratch.image);
+            // frame's solution must be further off, or the bound would not test the warm start.
+            // Judged against the keyframed scene prepared at that time (its links bounded for
+            // the motion, as the animation's): the still scene's hierarchy differs from the
+            // bounded mesh's (the block its own subtree) by 0.006 on the CPU and 0.015 at the
+            // GPU test's coarse settings, more than 4 cold iterations are off.
+            let mut fresh = Engine::new(&scene.at(*time), o, &Silent).unwrap();
+            let converged = fresh.render(&Silent).unwrap().image;
+            fresh.initialize().unwrap();
+            fresh.iterate(r.iterations).unwrap();
+            let c = rmse_over_mean(&fresh.draw().unwrap(), &converged);
+            let w = rmse_over_mean(image, &converged);
             println!(
-                "  control: {} iterations from the initial state: RMSE/mean {c:.4}",
+                "  control against the bounded scene at {time:.3} s: warm {w:.4}, {} iterations from the initial state {c:.4}",
                 r.iterations
             );
-            assert!(c > e, "cold start {c} is not worse than the warm start {e}");
+            assert!(
+                c > 2.0 * w,
+                "cold start {c} is not worse than the warm start {w}"
+            );
         }
     }
     errors
@@ -107,7 +113,8 @@ fn frames_against_scratch(o: &Options, frames: usize, fps: f64) -> Vec<f64> {
 /// Every animated frame at 6 fps (the block moves 4 cm and turns 2.5° per frame) within 0.05
 /// RMSE/mean of `render --time` (the still scene at that time, from scratch). Measured (CPU,
 /// bounded link mesh): 0.0061 and 0.0061, of which 0.0060 is the bounded mesh's hierarchy
-/// against the still scene's (the same at rest); the bound is the issue's.
+/// against the still scene's (the same at rest); against the bounded scene at that time 0.0012
+/// warm, 0.0135 cold. The bound is the issue's.
 #[test]
 fn cpu_frames_match_render_at_their_time() {
     let errors = frames_against_scratch(&options(BackendKind::Cpu), 3, 6.0);
@@ -117,7 +124,9 @@ fn cpu_frames_match_render_at_their_time() {
 }
 
 /// The same on the GPU (lavapipe, validation on; 32 bins, elements 0.5) for two animated
-/// frames.
+/// frames. Measured: 0.0142 and 0.0138, of which 0.015 is the bounded mesh's hierarchy against
+/// the still scene's at these coarse settings (0.016 at rest on the CPU); against the bounded
+/// scene at that time 0.0006 warm, 0.0108 cold.
 #[test]
 fn gpu_frames_match_render_at_their_time() {
     let o = options(BackendKind::Gpu);
