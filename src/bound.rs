@@ -427,6 +427,23 @@ impl Bound {
     }
 }
 
+/// Spheres (center, radius) around every moving object where `sys` has it: the top node of
+/// each group. Empty without a bound.
+pub fn moving_spheres(sys: &System) -> Vec<(DVec3, f64)> {
+    let Some(b) = &sys.bound else {
+        return Vec::new();
+    };
+    let h = &sys.hierarchy;
+    (0..h.len())
+        .filter(|&i| {
+            let g = b.node_group[i];
+            let p = h.nodes[i].parent;
+            g != STATIC && g != MIXED && (p == u32::MAX || b.node_group[p as usize] != g)
+        })
+        .map(|i| (h.nodes[i].center, h.nodes[i].radius))
+        .collect()
+}
+
 /// The used cone class nearest to `c` (a frame's link may fall in a class no sampled pose
 /// gave, between two that did; the ones next to the sampled range are marked used too).
 fn nearest_used(used: &[bool], c: u8) -> u8 {

@@ -180,6 +180,13 @@ fn bounded_updates_do_not_relink() {
             .map(|l| (l.receiver, l.sender))
             .collect();
         assert_eq!(now, pairs, "t = {t}: the link set changed");
+        // The shadow maps kept their texels away from the block: equal to casting every ray.
+        let mut full = engine.prepared().maps.clone();
+        full.render_cpu(&antiradiance::raycast::RayCaster::new(sys));
+        assert!(
+            full.data == engine.prepared().maps.data,
+            "t = {t}: stale shadow texels"
+        );
         let u = engine.update_times();
         println!(
             "t = {t}: update {:.0} ms (follow {:.0}, backend {:.0}, shadow maps and direct light {:.0}, carry {:.0})",

@@ -22,6 +22,11 @@ pub struct CpuBackend {
     state: Option<CpuState>,
     caster: RayCaster,
     timings: Vec<(String, f64)>,
+    /// After a bounded move ([`Backend::follow`]): the previous shadow maps and spheres around
+    /// the moved objects before and after, so that only rays near them are cast again.
+    reuse: Option<(crate::frame::shadow::ShadowMaps, Vec<(glam::DVec3, f64)>)>,
+    /// Shadow-map rays the last [`Backend::prepare_lights`] cast (the rest were kept).
+    pub rays_cast: usize,
 }
 
 impl CpuBackend {
@@ -34,6 +39,8 @@ impl CpuBackend {
             state: Some(state),
             caster: RayCaster::new(&prep.system),
             timings: Vec::new(),
+            reuse: None,
+            rays_cast: 0,
         }
     }
 
@@ -72,7 +79,10 @@ impl Backend for CpuBackend {
     fn prepare_lights(&mut self, prep: &mut Prepared) -> Result<()> {
         let t = Instant::now();
         if !prep.maps.views.is_empty() {
-            prep.maps.render_cpu(&self.caster);
+            let reuse = self.reuse.take();
+            self.rays_cast = prep
+                .maps
+                .render_cpu_reusing(&self.caster, reuse.as_ref().map(|(m, s)| (m, s.as_slice())));
         }
         self.time("shadow", t);
         let t = Instant::now();
@@ -121,9 +131,16 @@ impl Backend for CpuBackend {
         Ok(())
     }
 
-    fn follow(&mut self, prep: &Prepared) -> Result<bool> {
+    fn follow(&mut self, before: &Prepared, prep: &Prepared) -> Result<bool> {
         // The solver reads the system at every iteration: only the ray caster holds geometry.
         self.caster = RayCaster::new(&prep.system);
+        // The same lights see a change only along rays near the moved objects (conservative:
+        // their bounding spheres before and after).
+        self.reuse = (before.lights == prep.lights).then(|| {
+            let mut spheres = crate::bound::moving_spheres(&before.system);
+            spheres.extend(crate::bound::moving_spheres(&prep.system));
+            (before.maps.clone(), spheres)
+        });
         Ok(true)
     }
 

@@ -160,7 +160,7 @@ impl Engine {
         prep.camera = self.prep.camera.clone();
         // A backend that can follow the moved system in place keeps its tables (CPU); the
         // others are made anew for it.
-        if !(bounded && self.backend.follow(&prep)?) {
+        if !(bounded && self.backend.follow(&self.prep, &prep)?) {
             self.backend = backend::create(&self.options, &mut prep, ctx)?;
         }
         let backend_ms = ms(t1);
