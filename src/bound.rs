@@ -125,8 +125,7 @@ fn node_groups(h: &Hierarchy, element_group: &[u32]) -> Vec<u32> {
 /// Recomputes the center and radius of every node that is not static, as
 /// [`Hierarchy::build`] does, from the leaves below it in `els`.
 fn place_nodes(h: &mut Hierarchy, els: &[Element], node_group: &[u32]) {
-    for i in 0..h.len() {
-        let g = node_group[i];
+    for (i, &g) in node_group.iter().enumerate() {
         if g == STATIC {
             continue;
         }
