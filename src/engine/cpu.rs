@@ -25,8 +25,6 @@ pub struct CpuBackend {
     /// After a bounded move ([`Backend::follow`]): the previous shadow maps and spheres around
     /// the moved objects before and after, so that only rays near them are cast again.
     reuse: Option<(crate::frame::shadow::ShadowMaps, Vec<(glam::DVec3, f64)>)>,
-    /// Shadow-map rays the last [`Backend::prepare_lights`] cast (the rest were kept).
-    pub rays_cast: usize,
 }
 
 impl CpuBackend {
@@ -40,7 +38,6 @@ impl CpuBackend {
             caster: RayCaster::new(&prep.system),
             timings: Vec::new(),
             reuse: None,
-            rays_cast: 0,
         }
     }
 
@@ -80,8 +77,7 @@ impl Backend for CpuBackend {
         let t = Instant::now();
         if !prep.maps.views.is_empty() {
             let reuse = self.reuse.take();
-            self.rays_cast = prep
-                .maps
+            prep.maps
                 .render_cpu_reusing(&self.caster, reuse.as_ref().map(|(m, s)| (m, s.as_slice())));
         }
         self.time("shadow", t);
