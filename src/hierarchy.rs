@@ -48,13 +48,29 @@ impl Hierarchy {
     /// Builds a binary tree by median splits along the longest axis of the element centroids.
     /// Iterative (an explicit stack in pre-order), so no input can exhaust the call stack.
     pub fn build(elements: &[Element]) -> Self {
+        Self::build_grouped(elements, &vec![0; elements.len()])
+    }
+
+    /// [`Hierarchy::build`] with every group of elements (`group[e]`, any ids) its own subtree:
+    /// the top clusters split between groups (halving the list of groups, in id order), below
+    /// them median splits as usual. A moving object is one group (§3.3: "moving objects as own
+    /// subtrees"), so every node below the top is static or moves rigidly with one object. With
+    /// one group this is exactly [`Hierarchy::build`].
+    pub fn build_grouped(elements: &[Element], group: &[u32]) -> Self {
         assert!(!elements.is_empty(), "hierarchy needs at least one element");
+        assert_eq!(group.len(), elements.len());
         let mut h = Hierarchy {
             nodes: Vec::with_capacity(2 * elements.len()),
             leaf_of_element: vec![0; elements.len()],
             leaves: Vec::with_capacity(elements.len()),
         };
         let mut idx: Vec<u32> = (0..elements.len() as u32).collect();
+        // Groups contiguous in `idx` (stable: one group keeps the element order); `starts` are
+        // the positions where a group begins after the first.
+        idx.sort_by_key(|&e| group[e as usize]);
+        let starts: Vec<usize> = (1..idx.len())
+            .filter(|&i| group[idx[i] as usize] != group[idx[i - 1] as usize])
+            .collect();
         // A cluster is finished once both subtrees are built: its right child starts where
         // the left subtree ends, and the cluster ends where the right subtree does.
         enum Task {
@@ -77,8 +93,15 @@ impl Hierarchy {
                     parent,
                     depth,
                 } => {
+                    // Group boundaries strictly inside the range: split at the middle one.
+                    let inside: Vec<usize> = starts
+                        .iter()
+                        .copied()
+                        .filter(|&b| b > range.start && b < range.end)
+                        .collect();
+                    let forced = inside.get(inside.len() / 2).map(|&b| b - range.start);
                     let slice = &mut idx[range.clone()];
-                    if let Some(mid) = h.add_node(elements, slice, parent, depth) {
+                    if let Some(mid) = h.add_node(elements, slice, parent, depth, forced) {
                         let me = h.nodes.len() as u32 - 1;
                         let split = range.start + mid;
                         stack.push(Task::Finish(me));
@@ -108,13 +131,15 @@ impl Hierarchy {
     }
 
     /// Appends the node over `idx` (a leaf when it holds one element). For a cluster, orders
-    /// `idx` around the median along the longest axis and returns the split position.
+    /// `idx` around the median along the longest axis and returns the split position, or
+    /// returns `forced` (a group boundary) leaving `idx` as it is.
     fn add_node(
         &mut self,
         els: &[Element],
         idx: &mut [u32],
         parent: u32,
         depth: u32,
+        forced: Option<usize>,
     ) -> Option<usize> {
         let me = self.nodes.len() as u32;
         let area: f64 = idx.iter().map(|&i| els[i as usize].area).sum();
@@ -145,6 +170,9 @@ impl Hierarchy {
             self.leaf_of_element[idx[0] as usize] = me;
             self.leaves.push(me);
             return None;
+        }
+        if forced.is_some() {
+            return forced;
         }
         let (lo, hi) = idx.iter().fold(
             (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
@@ -219,7 +247,7 @@ mod tests {
         depth: u32,
     ) -> u32 {
         let me = h.nodes.len() as u32;
-        let Some(mid) = h.add_node(els, idx, parent, depth) else {
+        let Some(mid) = h.add_node(els, idx, parent, depth, None) else {
             return me;
         };
         let (left, right) = idx.split_at_mut(mid);

@@ -10,6 +10,7 @@
 
 pub mod animate;
 pub mod bins;
+pub mod bound;
 pub mod brdf;
 pub mod elements;
 pub mod engine;

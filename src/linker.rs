@@ -103,22 +103,62 @@ pub fn partly_behind(receiver: &Element, corners: &[DVec3; 3]) -> bool {
 /// difference between two configurations.
 const TIE: f64 = 1e-9;
 
-struct Ctx<'a> {
-    h: &'a Hierarchy,
-    els: &'a [Element],
-    bins: &'a Bins,
-    limit: f64,
+/// The refinement's view of one configuration of the scene (the bounded link mesh of
+/// [`crate::bound`] asks one per sampled pose).
+pub(crate) struct Ctx<'a> {
+    pub(crate) h: &'a Hierarchy,
+    pub(crate) els: &'a [Element],
+    pub(crate) bins: &'a Bins,
+    pub(crate) limit: f64,
     /// Links made so far (all threads) and the most allowed.
-    made: std::sync::atomic::AtomicU64,
-    max_links: u64,
+    pub(crate) made: std::sync::atomic::AtomicU64,
+    pub(crate) max_links: u64,
+    /// Per node, how far it may move between two sampled poses of a motion (empty: a still
+    /// scene), and its group ([`crate::bound::Bound::node_group`]): the oracle judges a pair
+    /// at its distance less both margins, unless the two move together.
+    pub(crate) margin: &'a [f64],
+    pub(crate) group: &'a [u32],
 }
 
-enum Step {
+/// One refinement decision: a link (or none), or the pairs to refine into.
+pub(crate) enum Step {
     Done(Option<Link>),
     Split(Vec<(u32, u32)>),
 }
 
-impl Ctx<'_> {
+impl<'a> Ctx<'a> {
+    /// The refinement over `h` and `els` with oracle τ = `oracle`.
+    pub(crate) fn new(
+        h: &'a Hierarchy,
+        els: &'a [Element],
+        bins: &'a Bins,
+        oracle: f64,
+        max_links: u64,
+    ) -> Self {
+        Ctx {
+            h,
+            els,
+            bins,
+            limit: oracle * bins.omega,
+            made: std::sync::atomic::AtomicU64::new(0),
+            max_links,
+            margin: &[],
+            group: &[],
+        }
+    }
+
+    /// The distance the oracle may lose between the pair's centers as they move.
+    fn slack(&self, r: u32, s: u32) -> f64 {
+        if self.margin.is_empty() {
+            return 0.0;
+        }
+        let (gr, gs) = (self.group[r as usize], self.group[s as usize]);
+        if gr == gs && gr != crate::bound::MIXED {
+            return 0.0;
+        }
+        self.margin[r as usize] + self.margin[s as usize]
+    }
+
     fn leaf(&self, n: u32) -> Option<&Element> {
         self.h.element(n).map(|e| &self.els[e as usize])
     }
@@ -140,8 +180,40 @@ impl Ctx<'_> {
         (front, back)
     }
 
+    /// The sides of the receiver `r` light from `s` arrives at ([`FRONT`], [`BACK`], both, or
+    /// 0: none, the pair exchanges nothing). Clusters receive at both.
+    pub(crate) fn sides(&self, r: u32, s: u32) -> u8 {
+        // A leaf reflects what arrives at its front and blocks what arrives at either side
+        // (opaque from both sides); a sender in its plane exchanges nothing with it.
+        let ns = &self.h.nodes[s as usize];
+        let Some(re) = self.leaf(r) else {
+            return FRONT | BACK;
+        };
+        let (front, back) = match self.leaf(s) {
+            Some(se) => (
+                partly_in_front(re, &se.corners),
+                partly_behind(re, &se.corners),
+            ),
+            None => {
+                let h = re.normal.dot(ns.center - re.center);
+                let tie = TIE * (h.abs() + ns.radius);
+                let (front, back) = (h + ns.radius > tie, h - ns.radius < -tie);
+                if front && back {
+                    // The bounding sphere straddles the plane: ask the cluster's triangles
+                    // (an adjacent wall's cluster touches the plane but has nothing behind).
+                    self.sides_of_cluster(re, s)
+                } else {
+                    (front, back)
+                }
+            }
+        };
+        // A closed solid's face does not block from behind: it needs no light from there.
+        let back = back && re.blocks_back;
+        (front as u8 * FRONT) | (back as u8 * BACK)
+    }
+
     /// One refinement decision for the pair (receiver `r`, sender `s`).
-    fn step(&self, r: u32, s: u32) -> Step {
+    pub(crate) fn step(&self, r: u32, s: u32) -> Step {
         let (nr, ns) = (&self.h.nodes[r as usize], &self.h.nodes[s as usize]);
         if r == s {
             // Self-links are always subdivided; a leaf does not light itself.
@@ -150,41 +222,17 @@ impl Ctx<'_> {
                 Some([a, b]) => Step::Split(vec![(a, a), (a, b), (b, a), (b, b)]),
             };
         }
-        // A leaf reflects what arrives at its front and blocks what arrives at either side
-        // (opaque from both sides); a sender in its plane exchanges nothing with it.
-        let mut sides = FRONT | BACK;
-        if let Some(re) = self.leaf(r) {
-            let (front, back) = match self.leaf(s) {
-                Some(se) => (
-                    partly_in_front(re, &se.corners),
-                    partly_behind(re, &se.corners),
-                ),
-                None => {
-                    let h = re.normal.dot(ns.center - re.center);
-                    let tie = TIE * (h.abs() + ns.radius);
-                    let (front, back) = (h + ns.radius > tie, h - ns.radius < -tie);
-                    if front && back {
-                        // The bounding sphere straddles the plane: ask the cluster's triangles
-                        // (an adjacent wall's cluster touches the plane but has nothing behind).
-                        self.sides_of_cluster(re, s)
-                    } else {
-                        (front, back)
-                    }
-                }
-            };
-            // A closed solid's face does not block from behind: it needs no light from there.
-            let back = back && re.blocks_back;
-            sides = (front as u8 * FRONT) | (back as u8 * BACK);
-            if sides == 0 {
-                return Step::Done(None);
-            }
+        let sides = self.sides(r, s);
+        if sides == 0 {
+            return Step::Done(None);
         }
         let d = (nr.center - ns.center).length();
         let big = nr.radius.max(ns.radius);
+        let dm = (d - self.slack(r, s)).max(0.0);
         // Regular meshes put many pairs exactly on these thresholds; a tie within TIE decides
         // the same way in any unit (rounding would otherwise flip it with the scene's scale).
-        let coarse = d <= (nr.radius + ns.radius) * (1.0 + TIE)
-            || PI * big * big > self.limit * d * d * (1.0 + TIE);
+        let coarse = dm <= (nr.radius + ns.radius) * (1.0 + TIE)
+            || PI * big * big > self.limit * dm * dm * (1.0 + TIE);
         let (rc, sc) = (self.h.children(r), self.h.children(s));
         if coarse && (rc.is_some() || sc.is_some()) {
             let split_receiver = match (rc, sc) {
@@ -201,7 +249,8 @@ impl Ctx<'_> {
         Step::Done(Some(self.link(r, s, d, sides)))
     }
 
-    fn link(&self, r: u32, s: u32, d: f64, sides: u8) -> Link {
+    /// The link of the pair at distance `d` between the centers, reaching `sides`.
+    pub(crate) fn link(&self, r: u32, s: u32, d: f64, sides: u8) -> Link {
         let (nr, ns) = (&self.h.nodes[r as usize], &self.h.nodes[s as usize]);
         let rho2 = (ns.area / PI).min(ns.radius * ns.radius);
         let dir = (nr.center - ns.center) / d;
@@ -246,14 +295,7 @@ pub fn build_links(
     max_links: u64,
 ) -> crate::Result<Links> {
     let t0 = Instant::now();
-    let ctx = Ctx {
-        h,
-        els,
-        bins,
-        limit: oracle * bins.omega,
-        made: std::sync::atomic::AtomicU64::new(0),
-        max_links,
-    };
+    let ctx = Ctx::new(h, els, bins, oracle, max_links);
     // Expand breadth-first until there is enough independent work for every core.
     let mut tasks = vec![(0u32, 0u32)];
     let mut links = Vec::new();
@@ -400,6 +442,18 @@ pub fn calibrate_form_factors(
     bins: &Bins,
     filters: &crate::filter::FilterTables,
 ) {
+    calibrate_links(&mut links.links, h, els, bins, filters);
+}
+
+/// [`calibrate_form_factors`] of some links only (the bounded link mesh recalibrates the links
+/// touching moving elements every frame, [`crate::bound`]).
+pub fn calibrate_links(
+    links: &mut [Link],
+    h: &Hierarchy,
+    els: &[Element],
+    bins: &Bins,
+    filters: &crate::filter::FilterTables,
+) {
     let m = bins.count;
     let cos_norm: Vec<f64> = els
         .par_iter()
@@ -408,7 +462,7 @@ pub fn calibrate_form_factors(
     let profiles = receiving_profiles(h, els, bins, &cos_norm);
     // Element indices of the leaves below node `n` (a contiguous pre-order range).
     let leaves_below = |n: u32| (n..h.nodes[n as usize].end).filter_map(|k| h.element(k));
-    links.links.par_iter_mut().for_each(|l| {
+    links.par_iter_mut().for_each(|l| {
         let (Some(re), Some(se)) = (h.element(l.receiver), h.element(l.sender)) else {
             let (nr, ns) = (&h.nodes[l.receiver as usize], &h.nodes[l.sender as usize]);
             let wb = bins.centers[l.sender_bin as usize];

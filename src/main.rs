@@ -314,6 +314,8 @@ fn run(cli: Cli) -> Result<()> {
             if let Some(t) = time {
                 s.move_to(t);
             }
+            // One frame: linked for where things stand, not for the keyframes' motion.
+            let s = s.still();
             let mut o = plan.options();
             o.solver = solver.overrides();
             o.solver.tolerance = tolerance;

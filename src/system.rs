@@ -66,6 +66,9 @@ pub struct System {
     /// (should be exactly 1: a closed enclosure loses no light), which every form factor was
     /// divided by. See [`System::conserve_energy`].
     pub energy_normalization: Option<f64>,
+    /// Scenes with keyframed objects: what moves and which links a frame recomputes (the
+    /// links are made for the whole motion, [`crate::bound`]); `None` for still scenes.
+    pub bound: Option<crate::bound::Bound>,
 }
 
 /// Cosine margin of [`System::reads`]: bins this close to a leaf's plane count as read.
@@ -132,7 +135,22 @@ impl System {
                 limit_bytes: CPU_TABLE_LIMIT_BYTES,
             });
         }
-        let hierarchy = Hierarchy::build(&elements);
+        // Keyframed objects are their own subtrees, linked for their whole motion (§3.3).
+        let groups = if link {
+            crate::bound::mesh_groups(scene)
+        } else {
+            None
+        };
+        let hierarchy = match &groups {
+            Some((_, mesh_group)) => {
+                let g: Vec<u32> = elements
+                    .iter()
+                    .map(|e| mesh_group[e.mesh as usize])
+                    .collect();
+                Hierarchy::build_grouped(&elements, &g)
+            }
+            None => Hierarchy::build(&elements),
+        };
         let meshing_ms = t0.elapsed().as_secs_f64() * 1e3;
         let max_links = crate::scene::max_links_limit();
         let estimate = estimate_links(elements.len(), bins.count, settings.oracle);
@@ -147,14 +165,32 @@ impl System {
                 ),
             });
         }
-        let mut links = if link {
-            build_links(&hierarchy, &elements, &bins, settings.oracle, max_links)?
-        } else {
-            Links {
-                offsets: vec![0; hierarchy.len() + 1],
-                used_classes: vec![false; crate::filter::class_count(&bins)],
-                ..Links::default()
+        let (mut links, bound) = match groups {
+            Some((objects, mesh_group)) => {
+                let (links, bound) = crate::bound::build_bounded_links(
+                    scene,
+                    &hierarchy,
+                    &elements,
+                    &bins,
+                    settings.oracle,
+                    max_links,
+                    objects,
+                    &mesh_group,
+                )?;
+                (links, Some(bound))
             }
+            None if link => (
+                build_links(&hierarchy, &elements, &bins, settings.oracle, max_links)?,
+                None,
+            ),
+            None => (
+                Links {
+                    offsets: vec![0; hierarchy.len() + 1],
+                    used_classes: vec![false; crate::filter::class_count(&bins)],
+                    ..Links::default()
+                },
+                None,
+            ),
         };
         let filters = FilterTables::new(&bins, &links.used_classes, settings.filter_cutoff);
         let t1 = Instant::now();
@@ -200,7 +236,15 @@ impl System {
             lobe_slot,
             occlusion: None,
             energy_normalization: None,
+            bound: None,
         };
+        if let Some(b) = bound {
+            // The moving links' values at this pose exactly as every frame will compute them.
+            let t = Instant::now();
+            b.refresh_links(&mut sys, None);
+            sys.bound = Some(b);
+            sys.links.linking_ms += t.elapsed().as_secs_f64() * 1e3;
+        }
         if closed_surfaces(scene) {
             let t2 = Instant::now();
             sys.conserve_energy(scene);
@@ -425,7 +469,7 @@ pub fn closed_surfaces(scene: &Scene) -> bool {
 }
 
 /// Lobe factors of every glossy leaf (in parallel) and each leaf's block index.
-fn lobe_factors(
+pub(crate) fn lobe_factors(
     leaves: &[LeafAttributes],
     lobes: &[Option<DiscreteLobe>],
     bins: &Bins,

@@ -65,6 +65,14 @@ pub trait Backend {
             "moving objects and lights need the antiradiance method".into(),
         ))
     }
+    /// Follows `prep` after its objects moved from where `before` had them along a bounded
+    /// link mesh (same nodes, links and table shapes; new geometry and form factors,
+    /// [`crate::bound`]) keeping its state, or returns false where the backend must be made
+    /// anew (the default). The next [`Backend::prepare_lights`] may reuse what the motion
+    /// cannot have changed.
+    fn follow(&mut self, _before: &Prepared, _prep: &Prepared) -> Result<bool> {
+        Ok(false)
+    }
     /// What a baseline method reports of its own (`None` for antiradiance).
     fn method_report(&self) -> Option<crate::methods::MethodReport> {
         None

@@ -22,6 +22,9 @@ pub struct CpuBackend {
     state: Option<CpuState>,
     caster: RayCaster,
     timings: Vec<(String, f64)>,
+    /// After a bounded move ([`Backend::follow`]): the previous shadow maps and spheres around
+    /// the moved objects before and after, so that only rays near them are cast again.
+    reuse: Option<(crate::frame::shadow::ShadowMaps, Vec<(glam::DVec3, f64)>)>,
 }
 
 impl CpuBackend {
@@ -34,6 +37,7 @@ impl CpuBackend {
             state: Some(state),
             caster: RayCaster::new(&prep.system),
             timings: Vec::new(),
+            reuse: None,
         }
     }
 
@@ -72,7 +76,9 @@ impl Backend for CpuBackend {
     fn prepare_lights(&mut self, prep: &mut Prepared) -> Result<()> {
         let t = Instant::now();
         if !prep.maps.views.is_empty() {
-            prep.maps.render_cpu(&self.caster);
+            let reuse = self.reuse.take();
+            prep.maps
+                .render_cpu_reusing(&self.caster, reuse.as_ref().map(|(m, s)| (m, s.as_slice())));
         }
         self.time("shadow", t);
         let t = Instant::now();
@@ -119,6 +125,19 @@ impl Backend for CpuBackend {
         state.residuals.clear();
         state.energies.clear();
         Ok(())
+    }
+
+    fn follow(&mut self, before: &Prepared, prep: &Prepared) -> Result<bool> {
+        // The solver reads the system at every iteration: only the ray caster holds geometry.
+        self.caster = RayCaster::new(&prep.system);
+        // The same lights see a change only along rays near the moved objects (conservative:
+        // their bounding spheres before and after).
+        self.reuse = (before.lights == prep.lights).then(|| {
+            let mut spheres = crate::bound::moving_spheres(&before.system);
+            spheres.extend(crate::bound::moving_spheres(&prep.system));
+            (before.maps.clone(), spheres)
+        });
+        Ok(true)
     }
 
     fn i_ex(&mut self) -> Result<Table> {

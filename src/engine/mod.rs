@@ -64,6 +64,9 @@ pub struct Engine {
     warm: bool,
     /// Whether the last update linked again.
     relinked: bool,
+    /// Whether a host placed an object since the last update ([`Engine::set_object_transform`]):
+    /// a pose the bounded link mesh may not cover, so the update prepares anew.
+    placed: bool,
     /// Residual of the last iteration [`Engine::iterate`] ran.
     last_residual: Option<f64>,
 }
@@ -162,6 +165,7 @@ impl Engine {
             update_times: motion::UpdateTimes::default(),
             warm: false,
             relinked: false,
+            placed: false,
             last_residual: None,
         })
     }

@@ -3,15 +3,25 @@
 //! [`Engine::update`] makes the engine follow, and the next iterations continue from the
 //! previous frame's solution (warm start).
 //!
-//! Where only lights moved, `update` keeps the elements and links and makes the lights, plan,
-//! shadow maps and backend anew. Where objects moved it is a **per-frame re-preparation**: the
-//! moved scene is discretized and linked again and the backend's tables are made anew (the shadow maps and direct light of
-//! every light, the links and form factors of everything), then the previous I_ex is carried
-//! over leaf by leaf (elements keep their index: a rigid motion subdivides a mesh the same way)
-//! and pulled into the new hierarchy. It is correct for any motion, at the price of relinking
-//! every frame; the paper's bounded link mesh (links made once for the worst case over the
-//! motion, only moving links' form factors recomputed) is not built yet (README, "Moving
-//! lights and objects").
+//! - **Only lights moved**: the elements and links are kept; the lights, plan, shadow maps and
+//!   backend are made anew, the solution carries over row for row.
+//! - **Keyframed objects moved along their keyframes** (`set_time`): the **bounded link mesh**
+//!   ([`crate::bound`]). The scene was linked once, at preparation, for the worst case over the
+//!   whole motion (moving objects are their own subtrees); an update moves the elements and
+//!   moving nodes and recomputes the sides, bins, cone class and form factor of only the links
+//!   touching a moving node ([`crate::System::follow`]) — nothing is relinked, the nodes and
+//!   rows stay, the solution carries over row for row. The CPU backend keeps its tables and
+//!   casts again only the shadow-map rays that pass near a moved object (before or after);
+//!   the GPU backend is made anew for the moved system (tables, link buffers and frame
+//!   uploaded again, every shadow map rendered, the old I_ex read back and uploaded). The
+//!   direct light is recomputed in both.
+//! - **Any other object motion** (a pose a host set with `set_object_transform`, which the
+//!   bound may not cover; objects marked `moving` without keyframes; a scene without a bound):
+//!   a **re-preparation**: the moved scene is discretized and linked again, the backend made
+//!   anew, and the previous I_ex carried over leaf by leaf (elements keep their index: a rigid
+//!   motion subdivides a mesh the same way) and pulled into the new hierarchy. Keyframed
+//!   objects are linked for their motion again, so later `set_time` updates follow the new
+//!   bound.
 
 use super::backend;
 use super::prepared::Prepared;
@@ -102,13 +112,16 @@ impl Engine {
     /// registered with [`Scene::add_object`]) at `m` (object-to-world) for the next
     /// [`Engine::update`]. Only objects marked moving (keyframes, `moving = true`) may move.
     pub fn set_object_transform(&mut self, object: usize, m: DMat4) -> Result<()> {
-        self.next_scene().set_object_transform(object, m)
+        self.next_scene().set_object_transform(object, m)?;
+        self.placed = true;
+        Ok(())
     }
 
     /// Makes the engine follow what moved since the last update (no-op when nothing did):
-    /// re-prepares the moved scene, makes the backend's tables and shadow maps anew and
-    /// carries the previous solution over as the start of the next iterations. GPU: the new
-    /// tables are uploaded here (the result image is a new one: hosts re-read
+    /// along the bounded link mesh where keyframed objects moved, else re-preparing the moved
+    /// scene (module doc); the shadow maps and direct light are recomputed and the previous
+    /// solution carries over as the start of the next iterations. GPU: the new tables are
+    /// uploaded here (the result image is a new one: hosts re-read
     /// [`super::gpu::GpuBackend::frame`] after an update).
     pub fn update(&mut self) -> Result<()> {
         if self.method != crate::settings::Method::Antiradiance {
@@ -132,21 +145,38 @@ impl Engine {
             .iter()
             .zip(&self.prep.scene.meshes)
             .all(|(a, b)| a.positions == b.positions);
+        // Objects moved along their keyframes: the bounded link mesh follows them (nothing
+        // relinked, the nodes and rows stay, the solution carries over row for row). A pose a
+        // host set may lie outside the bound: prepared anew, as is a scene without a bound.
+        let followed = if still || self.placed {
+            None
+        } else {
+            self.prep.moved(&scene, &self.options)?
+        };
+        let bounded = followed.is_some();
         let (mut prep, warm) = if still {
             (self.prep.relit(&scene, &self.options)?, Some(old))
+        } else if let Some(prep) = followed {
+            (prep, Some(old))
         } else {
             let prep = Prepared::new(&scene, &self.options, memory, &Silent)?;
             let warm = carry_over(&self.prep.system, &prep.system, &old);
             (prep, warm)
         };
-        self.relinked = !still;
+        self.relinked = !still && !bounded;
+        self.placed = false;
         let prepare_ms = ms(t);
         let t1 = Instant::now();
         // A camera a host set (Engine::set_camera) stays: the re-prepared scene has its own.
         prep.camera = self.prep.camera.clone();
-        let mut backend = backend::create(&self.options, &mut prep, ctx)?;
+        // A backend that can follow the moved system in place keeps its tables (CPU); the
+        // others are made anew for it.
+        if !(bounded && self.backend.follow(&self.prep, &prep)?) {
+            self.backend = backend::create(&self.options, &mut prep, ctx)?;
+        }
         let backend_ms = ms(t1);
         let t2 = Instant::now();
+        let backend = &mut self.backend;
         backend.prepare_lights(&mut prep)?;
         let lights_ms = ms(t2);
         let t3 = Instant::now();
@@ -154,7 +184,6 @@ impl Engine {
             Some(table) => backend.warm_start(&prep, table)?,
             None => backend.initialize(&prep)?,
         }
-        self.backend = backend;
         self.prep = prep;
         self.update_times = UpdateTimes {
             prepare_ms,
@@ -168,7 +197,7 @@ impl Engine {
     }
 
     /// For hosts recording into their own command buffer: performs [`Engine::update`] on the
-    /// host and records nothing into `cmd`. The update relinks and re-creates the GPU tables
+    /// host and records nothing into `cmd`. On the GPU backend the update re-creates the tables
     /// (host work and uploads that finish before this returns), so there is nothing left to
     /// record; the next [`Engine::record_iterations`] continues from the carried-over solution.
     pub fn record_update(&mut self, cmd: vk::CommandBuffer) -> Result<()> {
@@ -182,7 +211,8 @@ impl Engine {
     }
 
     /// Whether the last [`Engine::update`] discretized and linked the scene again (objects
-    /// moved); false where only lights moved and the links were kept.
+    /// moved outside a bounded link mesh); false where only lights moved or keyframed objects
+    /// moved along their bound, and the links were kept.
     pub fn relinked(&self) -> bool {
         self.relinked
     }
@@ -197,13 +227,15 @@ impl Engine {
 /// The parts of one [`Engine::update`], milliseconds.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct UpdateTimes {
-    /// Discretizing and linking the moved scene, planning, and mapping the old solution
+    /// Following the bounded link mesh (moving the elements, recomputing the moving links) or
+    /// discretizing and linking the moved scene, then planning and mapping the old solution
     /// onto it (includes reading I_ex back from the GPU).
     pub prepare_ms: f64,
     /// Creating the backend's tables, link buffers and frame (GPU: allocations, uploads,
-    /// pipelines from the cache).
+    /// pipelines from the cache), or the CPU backend following in place (its ray caster).
     pub backend_ms: f64,
-    /// Shadow maps of every light and the leaves' direct light.
+    /// Shadow maps (CPU after a bounded move: only rays near the moved objects) and the leaves'
+    /// direct light.
     pub lights_ms: f64,
     /// Handing the carried-over solution to the backend (GPU: its upload).
     pub carry_ms: f64,

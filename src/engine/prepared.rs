@@ -117,6 +117,28 @@ impl Prepared {
         )
     }
 
+    /// This prepared scene with its objects where `scene` has them, along its bounded link
+    /// mesh ([`crate::System::follow`]: the elements, moving nodes and the links touching them
+    /// recomputed, nothing relinked), the surfaces, lights, plan and shadow-map views made
+    /// anew. `None` where the system has no bound or `scene` is not its scene moved rigidly.
+    pub fn moved(&self, scene: &Scene, options: &Options) -> Result<Option<Self>> {
+        let mut system = self.system.clone();
+        if !system.follow(scene, &self.settings)? {
+            return Ok(None);
+        }
+        let surfaces = Surfaces::new(scene, &system);
+        Self::lit(
+            scene,
+            options,
+            self.settings.clone(),
+            self.camera.clone(),
+            self.target.clone(),
+            system,
+            surfaces,
+        )
+        .map(Some)
+    }
+
     /// The lights (analytic and emitter samples), the plan and the shadow-map views of a
     /// discretized scene.
     fn lit(

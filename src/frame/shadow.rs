@@ -347,6 +347,24 @@ impl ShadowMaps {
 
     /// Fills the maps by casting a ray through every texel center (the CPU backend).
     pub fn render_cpu(&mut self, caster: &RayCaster) {
+        self.render_cpu_reusing(caster, None);
+    }
+
+    /// [`ShadowMaps::render_cpu`] after objects moved: where `old` has the same views, its
+    /// texels whose rays meet none of the spheres `moved` (around every moved object before and
+    /// after the move) are kept, as nothing else can change along them. Returns the rays cast.
+    pub fn render_cpu_reusing(
+        &mut self,
+        caster: &RayCaster,
+        reuse: Option<(&ShadowMaps, &[(DVec3, f64)])>,
+    ) -> usize {
+        let reuse =
+            reuse.filter(|(old, _)| old.views == self.views && old.data.len() == self.texels());
+        let meets = |org: DVec3, dir: DVec3, (c, r): (DVec3, f64)| {
+            let t = (c - org).dot(dir).max(0.0);
+            (org + dir * t - c).length() <= r
+        };
+        let cast = std::sync::atomic::AtomicUsize::new(0);
         // One task per texel row of every view (rows of different views differ in length).
         let rows: Vec<(usize, u32)> = self
             .views
@@ -365,6 +383,13 @@ impl ShadowMaps {
                         if view.front.is_some_and(|n| dir.dot(n) < -0.1) {
                             return EMPTY;
                         }
+                        if let Some((old, moved)) = reuse {
+                            if !moved.iter().any(|&m| meets(org, dir, m)) {
+                                let k = self.offsets[v] + (j * view.size + i) as usize;
+                                return old.data[k];
+                            }
+                        }
+                        cast.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                         caster
                             .closest(org, dir, 0.0, f64::INFINITY)
                             .map_or(EMPTY, |h| view.distance(org + dir * h.t) as f32)
@@ -373,6 +398,7 @@ impl ShadowMaps {
             })
             .collect();
         self.data = filled.concat();
+        cast.into_inner()
     }
 
     /// The view of light `light` that covers point `p`: of several (a cube's faces), the one

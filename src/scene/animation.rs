@@ -246,6 +246,17 @@ impl Scene {
         s
     }
 
+    /// The scene as it stands with no object keyframed (their keys dropped, nothing else
+    /// changed): what `render` and `render --time` prepare, linked for this pose alone rather
+    /// than for a motion ([`crate::bound`]).
+    pub fn still(&self) -> Scene {
+        let mut s = self.clone();
+        for o in &mut s.objects {
+            o.motion = None;
+        }
+        s
+    }
+
     /// [`Scene::at`] in place.
     pub fn move_to(&mut self, t: f64) {
         for i in 0..self.objects.len() {
