@@ -110,9 +110,6 @@ pub(crate) struct Ctx<'a> {
     pub(crate) els: &'a [Element],
     pub(crate) bins: &'a Bins,
     pub(crate) limit: f64,
-    /// Links made so far (all threads) and the most allowed.
-    pub(crate) made: std::sync::atomic::AtomicU64,
-    pub(crate) max_links: u64,
     /// Per node, how far it may move between two sampled poses of a motion (empty: a still
     /// scene), and its group ([`crate::bound::Bound::node_group`]): the oracle judges a pair
     /// at its distance less both margins, unless the two move together.
@@ -128,20 +125,12 @@ pub(crate) enum Step {
 
 impl<'a> Ctx<'a> {
     /// The refinement over `h` and `els` with oracle τ = `oracle`.
-    pub(crate) fn new(
-        h: &'a Hierarchy,
-        els: &'a [Element],
-        bins: &'a Bins,
-        oracle: f64,
-        max_links: u64,
-    ) -> Self {
+    pub(crate) fn new(h: &'a Hierarchy, els: &'a [Element], bins: &'a Bins, oracle: f64) -> Self {
         Ctx {
             h,
             els,
             bins,
             limit: oracle * bins.omega,
-            made: std::sync::atomic::AtomicU64::new(0),
-            max_links,
             margin: &[],
             group: &[],
         }
@@ -266,22 +255,73 @@ impl<'a> Ctx<'a> {
             sides,
         }
     }
+}
 
-    /// Refines the pair into links (recursion depth ≤ twice the hierarchy's, which median
-    /// splits keep logarithmic); stops early once more than `max_links` exist.
-    fn refine(&self, r: u32, s: u32, out: &mut Vec<Link>) {
-        use std::sync::atomic::Ordering::Relaxed;
-        if self.made.load(Relaxed) > self.max_links {
+/// Refines the root pair (0, 0) by `step` into links, in parallel over all cores: breadth-first
+/// until there is enough independent work for every core, then depth-first per pair (recursion
+/// depth ≤ twice the hierarchy's, which median splits keep logarithmic). Stops early once more
+/// than `max_links` exist (the caller refuses).
+pub(crate) fn refine_all(step: &(dyn Fn(u32, u32) -> Step + Sync), max_links: u64) -> Vec<Link> {
+    use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
+    fn refine(
+        step: &(dyn Fn(u32, u32) -> Step + Sync),
+        made: &AtomicU64,
+        max: u64,
+        r: u32,
+        s: u32,
+        out: &mut Vec<Link>,
+    ) {
+        if made.load(Relaxed) > max {
             return;
         }
-        match self.step(r, s) {
+        match step(r, s) {
             Step::Done(l) => {
-                self.made.fetch_add(l.is_some() as u64, Relaxed);
+                made.fetch_add(l.is_some() as u64, Relaxed);
                 out.extend(l)
             }
-            Step::Split(pairs) => pairs.into_iter().for_each(|(a, b)| self.refine(a, b, out)),
+            Step::Split(p) => p
+                .into_iter()
+                .for_each(|(a, b)| refine(step, made, max, a, b, out)),
         }
     }
+    let made = AtomicU64::new(0);
+    let mut tasks = vec![(0u32, 0u32)];
+    let mut links = Vec::new();
+    let want = 64 * rayon::current_num_threads();
+    while !tasks.is_empty() && tasks.len() < want {
+        let mut next = Vec::with_capacity(tasks.len() * 4);
+        for (r, s) in tasks {
+            match step(r, s) {
+                Step::Done(l) => links.extend(l),
+                Step::Split(p) => next.extend(p),
+            }
+        }
+        tasks = next;
+    }
+    let rest: Vec<Vec<Link>> = tasks
+        .par_iter()
+        .map(|&(r, s)| {
+            let mut out = Vec::new();
+            refine(step, &made, max_links, r, s, &mut out);
+            out
+        })
+        .collect();
+    links.extend(rest.into_iter().flatten());
+    links
+}
+
+/// `links` sorted by (receiver, sender), and the index of each of `nodes` receivers' first link
+/// (`nodes + 1` entries).
+pub(crate) fn by_receiver(mut links: Vec<Link>, nodes: usize) -> (Vec<Link>, Vec<u32>) {
+    links.par_sort_unstable_by_key(|l| (l.receiver, l.sender));
+    let mut offsets = vec![0u32; nodes + 1];
+    for l in &links {
+        offsets[l.receiver as usize + 1] += 1;
+    }
+    for i in 0..nodes {
+        offsets[i + 1] += offsets[i];
+    }
+    (links, offsets)
 }
 
 /// Builds all links of the scene, in parallel over all cores.
@@ -295,30 +335,8 @@ pub fn build_links(
     max_links: u64,
 ) -> crate::Result<Links> {
     let t0 = Instant::now();
-    let ctx = Ctx::new(h, els, bins, oracle, max_links);
-    // Expand breadth-first until there is enough independent work for every core.
-    let mut tasks = vec![(0u32, 0u32)];
-    let mut links = Vec::new();
-    let want = 64 * rayon::current_num_threads();
-    while !tasks.is_empty() && tasks.len() < want {
-        let mut next = Vec::with_capacity(tasks.len() * 4);
-        for (r, s) in tasks {
-            match ctx.step(r, s) {
-                Step::Done(l) => links.extend(l),
-                Step::Split(p) => next.extend(p),
-            }
-        }
-        tasks = next;
-    }
-    let rest: Vec<Vec<Link>> = tasks
-        .par_iter()
-        .map(|&(r, s)| {
-            let mut out = Vec::new();
-            ctx.refine(r, s, &mut out);
-            out
-        })
-        .collect();
-    links.extend(rest.into_iter().flatten());
+    let ctx = Ctx::new(h, els, bins, oracle);
+    let links = refine_all(&|r, s| ctx.step(r, s), max_links);
     if links.len() as u64 > max_links {
         return Err(crate::Error::Setting {
             field: "oracle",
@@ -328,14 +346,7 @@ pub fn build_links(
             ),
         });
     }
-    links.par_sort_unstable_by_key(|l| (l.receiver, l.sender));
-    let mut offsets = vec![0u32; h.len() + 1];
-    for l in &links {
-        offsets[l.receiver as usize + 1] += 1;
-    }
-    for i in 0..h.len() {
-        offsets[i + 1] += offsets[i];
-    }
+    let (links, offsets) = by_receiver(links, h.len());
     let mut used_classes = vec![false; filter::class_count(bins)];
     for l in &links {
         used_classes[l.cone as usize] = true;

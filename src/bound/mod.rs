@@ -20,7 +20,6 @@ use crate::scene::{Scene, SolverSettings};
 use crate::system::System;
 use glam::{DMat4, DVec3};
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
 use std::time::Instant;
 
 /// Poses sampled between two consecutive keys (plus the keys themselves). Fewer samples mean
@@ -233,14 +232,14 @@ pub fn build_bounded_links(
         })
         .collect();
     // The pose the elements stand at now: the links' values.
-    let now = Ctx::new(h, els, bins, oracle, max_links);
+    let now = Ctx::new(h, els, bins, oracle);
     let sampled: Vec<Ctx> = trees
         .iter()
         .zip(&poses)
         .map(|(t, p)| Ctx {
             margin: &margin,
             group: &node_group,
-            ..Ctx::new(t, p, bins, oracle, max_links)
+            ..Ctx::new(t, p, bins, oracle)
         })
         .collect();
     let moving = |n: u32| node_group[n as usize] != STATIC;
@@ -268,50 +267,7 @@ pub fn build_bounded_links(
         };
         Step::Done(Some(now.link(r, s, d.max(f64::MIN_POSITIVE), sides)))
     };
-    let made = AtomicU64::new(0);
-    fn refine(
-        step: &(dyn Fn(u32, u32) -> Step + Sync),
-        made: &AtomicU64,
-        max: u64,
-        r: u32,
-        s: u32,
-        out: &mut Vec<Link>,
-    ) {
-        if made.load(Relaxed) > max {
-            return;
-        }
-        match step(r, s) {
-            Step::Done(l) => {
-                made.fetch_add(l.is_some() as u64, Relaxed);
-                out.extend(l)
-            }
-            Step::Split(p) => p
-                .into_iter()
-                .for_each(|(a, b)| refine(step, made, max, a, b, out)),
-        }
-    }
-    let mut tasks = vec![(0u32, 0u32)];
-    let mut links = Vec::new();
-    let want = 64 * rayon::current_num_threads();
-    while !tasks.is_empty() && tasks.len() < want {
-        let mut next = Vec::with_capacity(tasks.len() * 4);
-        for (r, s) in tasks {
-            match step(r, s) {
-                Step::Done(l) => links.extend(l),
-                Step::Split(p) => next.extend(p),
-            }
-        }
-        tasks = next;
-    }
-    let rest: Vec<Vec<Link>> = tasks
-        .par_iter()
-        .map(|&(r, s)| {
-            let mut out = Vec::new();
-            refine(&step, &made, max_links, r, s, &mut out);
-            out
-        })
-        .collect();
-    links.extend(rest.into_iter().flatten());
+    let links = crate::linker::refine_all(&step, max_links);
     if links.len() as u64 > max_links {
         return Err(crate::Error::Setting {
             field: "oracle",
@@ -321,14 +277,7 @@ pub fn build_bounded_links(
             ),
         });
     }
-    links.par_sort_unstable_by_key(|l| (l.receiver, l.sender));
-    let mut offsets = vec![0u32; h.len() + 1];
-    for l in &links {
-        offsets[l.receiver as usize + 1] += 1;
-    }
-    for i in 0..h.len() {
-        offsets[i + 1] += offsets[i];
-    }
+    let (links, offsets) = crate::linker::by_receiver(links, h.len());
     let moving_links: Vec<u32> = (0..links.len() as u32)
         .filter(|&i| {
             let l = &links[i as usize];
@@ -343,7 +292,7 @@ pub fn build_bounded_links(
         used[l.cone as usize] = true;
     }
     for (t, p) in trees.iter().zip(&poses) {
-        let c = Ctx::new(t, p, bins, oracle, max_links);
+        let c = Ctx::new(t, p, bins, oracle);
         let range = moving_links
             .par_iter()
             .map(|&i| {
@@ -387,7 +336,7 @@ impl Bound {
     /// there would; pairs that exchange nothing at this pose get a zero form factor. `lambda`
     /// is the energy normalization the form factors are divided by.
     pub fn refresh_links(&self, sys: &mut System, lambda: Option<f64>) {
-        let ctx = Ctx::new(&sys.hierarchy, &sys.elements, &sys.bins, 1.0, u64::MAX);
+        let ctx = Ctx::new(&sys.hierarchy, &sys.elements, &sys.bins, 1.0);
         let used = &sys.links.used_classes;
         let links = &sys.links.links;
         let (mut fresh, silent): (Vec<Link>, Vec<bool>) = self

@@ -55,7 +55,7 @@ fn no_link_is_refined_anywhere_along_the_motion() {
         let els = elements_at(&s, &sys.elements, &mesh_group, &objects, &b.transforms, t);
         let mut h = sys.hierarchy.clone();
         place_nodes(&mut h, &els, &b.node_group);
-        let c = Ctx::new(&h, &els, &sys.bins, s.solver.oracle, u64::MAX);
+        let c = Ctx::new(&h, &els, &sys.bins, s.solver.oracle);
         let split = sys
             .links
             .links
