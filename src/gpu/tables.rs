@@ -185,6 +185,39 @@ pub struct DrawData {
     pub leaf_quads: Vec<QuadInstance>,
 }
 
+/// The multiply-rotate hash of rustc (`FxHasher`): the link packing looks up a small key per
+/// link, where the standard library's SipHash took most of the time.
+#[derive(Default)]
+struct FxHasher(u64);
+
+impl std::hash::Hasher for FxHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        for c in bytes.chunks(8) {
+            let mut w = [0u8; 8];
+            w[..c.len()].copy_from_slice(c);
+            self.write_u64(u64::from_le_bytes(w));
+        }
+    }
+    fn write_u64(&mut self, v: u64) {
+        self.0 = (self.0.rotate_left(5) ^ v).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+    fn write_u32(&mut self, v: u32) {
+        self.write_u64(v as u64);
+    }
+    fn write_u16(&mut self, v: u16) {
+        self.write_u64(v as u64);
+    }
+    fn write_u8(&mut self, v: u8) {
+        self.write_u64(v as u64);
+    }
+    fn write_usize(&mut self, v: usize) {
+        self.write_u64(v as u64);
+    }
+    fn finish(&self) -> u64 {
+        self.0
+    }
+}
+
 /// Which I_ex image holds row `row` of `sys`: [`SENDER_LEAF`] (the leaves' ping-pong pair),
 /// [`SENDER_EVEN`] or [`SENDER_ODD`] (clusters by depth parity, as pull writes them).
 pub fn sender_image(sys: &System, row: u32) -> u32 {
@@ -344,20 +377,25 @@ impl DrawData {
         u64,
     )> {
         use std::collections::HashMap;
-        let mut combo_of: HashMap<(u16, u16, Vec<(u32, u32)>), u32> = HashMap::new();
+        type Fast<K, V> = HashMap<K, V, std::hash::BuildHasherDefault<FxHasher>>;
+        let mut combo_of: Fast<(u16, u16, Vec<(u32, u32)>), u32> = Fast::default();
         let (mut combos, mut runs) = (Vec::new(), Vec::new());
         let (mut fragments, mut lines) = (0u64, 0u64);
-        // Every link's combo and run count (links into the same receiver from the same side share
-        // its mask, and usually their (bin, class) too, so runs are cached per (bin, class, sides)).
+        // Every link's combo and run count. The runs depend on the central bin, the cone class
+        // and which bins the receiver reads: all of them for a cluster, those facing the sides
+        // the link reaches for a leaf (`System::reads`: its normal and the sides). So they are
+        // cached per (normal, bin, class, sides) over the whole scene (coplanar leaves share).
         let mut per_link: Vec<(u32, u32)> = Vec::with_capacity(sys.links.links.len());
-        let mut cache: HashMap<(u16, u8, u8), (u32, u32)> = HashMap::new();
-        let mut cache_row = u32::MAX;
+        let mut cache: Fast<([u64; 3], u16, u8, u8), (u32, u32)> = Fast::default();
         for l in &sys.links.links {
-            if l.receiver != cache_row {
-                cache.clear();
-                cache_row = l.receiver;
-            }
-            let key = (l.receiver_bin, l.cone, l.sides);
+            let reader = match sys.leaf_slot[l.receiver as usize] {
+                u32::MAX => ([u64::MAX; 3], 0),
+                slot => {
+                    let n = sys.leaves[slot as usize].normal;
+                    ([n.x, n.y, n.z].map(|c| (c + 0.0).to_bits()), l.sides)
+                }
+            };
+            let key = (reader.0, l.receiver_bin, l.cone, reader.1);
             let entry = if let Some(e) = cache.get(&key) {
                 *e
             } else {
@@ -402,9 +440,26 @@ impl DrawData {
         }
         // Order the records by the sender's image, then run count: one draw per (image, count),
         // `2·runs` vertices per link, and the vertex shader fetches I_ex from that image only.
-        let image = |i: u32| sender_image(sys, sys.links.links[i as usize].sender);
-        let mut order: Vec<u32> = (0..per_link.len() as u32).collect();
-        order.sort_by_key(|&i| (image(i), per_link[i as usize].1 & 0xff));
+        // A counting sort (stable): at most 3 × 256 keys.
+        let key: Vec<u32> = sys
+            .links
+            .links
+            .iter()
+            .zip(&per_link)
+            .map(|(l, e)| sender_image(sys, l.sender) << 8 | (e.1 & 0xff))
+            .collect();
+        let mut start = vec![0u32; 3 << 8 | 1];
+        for &k in &key {
+            start[k as usize + 1] += 1;
+        }
+        for i in 1..start.len() {
+            start[i] += start[i - 1];
+        }
+        let mut order = vec![0u32; key.len()];
+        for (i, &k) in key.iter().enumerate() {
+            order[start[k as usize] as usize] = i as u32;
+            start[k as usize] += 1;
+        }
         let mut buckets: Vec<(u32, u32, u32, u32)> = Vec::new();
         let links: Vec<GpuLink> = order
             .iter()
@@ -412,7 +467,7 @@ impl DrawData {
             .map(|(k, &i)| {
                 let l = &sys.links.links[i as usize];
                 let (combo, count) = (per_link[i as usize].0, per_link[i as usize].1 & 0xff);
-                let source = image(i);
+                let source = key[i as usize] >> 8;
                 match buckets.last_mut() {
                     Some(b) if b.0 == source && b.1 == count => b.3 += 1,
                     _ => buckets.push((source, count, k as u32, 1)),
