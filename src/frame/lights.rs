@@ -156,25 +156,41 @@ pub fn direct_radiance(
 /// irradiance there. This is what [`crate::CpuSolver::set_direct`] and
 /// [`crate::gpu::GpuSolver::set_direct`] take.
 pub fn direct_in_table(sys: &System, lights: &[Light], maps: &ShadowMaps) -> Table {
+    use rayon::prelude::*;
+    // Per leaf (in parallel), its lights' (bin, radiance) in light order, summed in that order.
+    let per_leaf: Vec<Vec<(usize, DVec3)>> = sys
+        .leaves
+        .par_iter()
+        .map(|leaf| {
+            let e = &sys.elements[sys.hierarchy.element(leaf.node).expect("leaf") as usize];
+            let mut out = Vec::new();
+            for (i, light) in lights.iter().enumerate() {
+                let Some(inc) = incident(light, e.center) else {
+                    continue;
+                };
+                let cos = -inc.travel.dot(leaf.normal);
+                if cos <= 0.0 {
+                    continue;
+                }
+                let v = maps.visibility(i, e.center, leaf.normal, cos);
+                if v <= 0.0 {
+                    continue;
+                }
+                let b = front_bin(&sys.bins, inc.travel, leaf.normal, -1.0);
+                let cb = -sys.bins.centers[b].dot(leaf.normal);
+                out.push((
+                    b,
+                    inc.irradiance * (cos * v / (sys.bins.omega * leaf.cos_norm * cb)),
+                ));
+            }
+            out
+        })
+        .collect();
     let mut t = Table::zeros(sys.rows(), sys.bins.count);
-    for leaf in &sys.leaves {
-        let e = &sys.elements[sys.hierarchy.element(leaf.node).expect("leaf") as usize];
+    for (leaf, adds) in sys.leaves.iter().zip(per_leaf) {
         let row = t.row_mut(leaf.node as usize);
-        for (i, light) in lights.iter().enumerate() {
-            let Some(inc) = incident(light, e.center) else {
-                continue;
-            };
-            let cos = -inc.travel.dot(leaf.normal);
-            if cos <= 0.0 {
-                continue;
-            }
-            let v = maps.visibility(i, e.center, leaf.normal, cos);
-            if v <= 0.0 {
-                continue;
-            }
-            let b = front_bin(&sys.bins, inc.travel, leaf.normal, -1.0);
-            let cb = -sys.bins.centers[b].dot(leaf.normal);
-            row[b] += inc.irradiance * (cos * v / (sys.bins.omega * leaf.cos_norm * cb));
+        for (b, v) in adds {
+            row[b] += v;
         }
     }
     t

@@ -19,19 +19,23 @@ pub const FILLER: u32 = 0x8000_0000;
 
 /// Encodes RGBA f32 texels in `format` (float16 or float32).
 pub fn encode(format: vk::Format, texels: &[[f32; 4]]) -> Vec<u8> {
+    // Sized once and filled texel by texel: tables run to millions of texels.
     if format == vk::Format::R16G16B16A16_SFLOAT {
-        texels
-            .iter()
-            .flat_map(|t| {
-                t.iter()
-                    .flat_map(|&x| f16::from_f32(x).to_bits().to_le_bytes())
-            })
-            .collect()
+        let mut out = Vec::with_capacity(texels.len() * 8);
+        for t in texels {
+            for &x in t {
+                out.extend_from_slice(&f16::from_f32(x).to_bits().to_le_bytes());
+            }
+        }
+        out
     } else {
-        texels
-            .iter()
-            .flat_map(|t| t.iter().flat_map(|x| x.to_le_bytes()))
-            .collect()
+        let mut out = Vec::with_capacity(texels.len() * 16);
+        for t in texels {
+            for &x in t {
+                out.extend_from_slice(&x.to_le_bytes());
+            }
+        }
+        out
     }
 }
 

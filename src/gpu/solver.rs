@@ -278,9 +278,10 @@ impl GpuSolver {
             return Ok(());
         };
         let l = *self.res.layout();
-        let mut scaled = table.clone();
-        scaled.data.iter_mut().for_each(|v| *v *= self.scale);
-        let bytes = encode(self.res.plan.format, &l.from_table(&scaled));
+        let bytes = encode(
+            self.res.plan.format,
+            &l.from_table_scaled(table, self.scale),
+        );
         self.res.images.direct.upload(&bytes)
     }
 

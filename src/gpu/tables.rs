@@ -137,12 +137,18 @@ impl TableLayout {
 
     /// Lays a [`Table`] out as RGBA texels.
     pub fn from_table(&self, t: &Table) -> Vec<[f32; 4]> {
+        self.from_table_scaled(t, 1.0)
+    }
+
+    /// As [`TableLayout::from_table`], every value multiplied by `scale` (the solver's source
+    /// scale) on the way, without a scaled copy of the table.
+    pub fn from_table_scaled(&self, t: &Table, scale: f64) -> Vec<[f32; 4]> {
         let w = self.width() as usize;
         let mut out = vec![[0.0f32; 4]; w * self.rows_per_column as usize];
         for r in 0..self.rows {
             for j in 0..self.bins {
                 let (x, y) = self.texel(r, j);
-                let v = t.data[(r * self.bins + j) as usize];
+                let v = t.data[(r * self.bins + j) as usize] * scale;
                 out[y as usize * w + x as usize] = [v.x as f32, v.y as f32, v.z as f32, 0.0];
             }
         }
