@@ -125,10 +125,11 @@ fn empty_closed_surfaces(
     }));
     let mut tests = 0u64;
     let mut out = std::collections::HashSet::new();
-    for (&r, c) in corners {
-        if !closed[&r] {
-            continue;
-        }
+    // In component order, so that the budget cuts off the same surfaces on every run.
+    let mut roots: Vec<usize> = corners.keys().copied().filter(|r| closed[r]).collect();
+    roots.sort_unstable();
+    for r in roots {
+        let c = &corners[&r];
         let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
         for p in c {
             lo = lo.min(*p);
