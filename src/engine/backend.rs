@@ -67,8 +67,8 @@ pub trait Backend {
     }
     /// Follows `prep` after its objects moved from where `before` had them along a bounded
     /// link mesh (same nodes, links and table shapes; new geometry and form factors,
-    /// [`crate::bound`]) keeping its state, or returns false where the backend must be made
-    /// anew (the default). The next [`Backend::prepare_lights`] may reuse what the motion
+    /// [`crate::bound`]), or after only its lights moved (same system), keeping its state; or
+    /// returns false where the backend must be made anew (the default). The next [`Backend::prepare_lights`] may reuse what the motion
     /// cannot have changed.
     fn follow(&mut self, _before: &Prepared, _prep: &Prepared) -> Result<bool> {
         Ok(false)

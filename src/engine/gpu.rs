@@ -154,6 +154,38 @@ impl Backend for GpuBackend {
         self.ctx.info.name.clone()
     }
 
+    fn follow(&mut self, before: &Prepared, prep: &Prepared) -> Result<bool> {
+        // Only lights moved (the geometry, hence the system and its tables, is the same) and
+        // the solver was planned for the same passes and precision: keep the solver and its
+        // tables, make only the frame (lights, shadow views) anew. Moved objects change the
+        // link records: the backend is made anew for them.
+        let still = before
+            .scene
+            .meshes
+            .iter()
+            .zip(&prep.scene.meshes)
+            .all(|(a, b)| a.positions == b.positions)
+            && before.scene.meshes.len() == prep.scene.meshes.len();
+        if !still
+            || before.plan.features != prep.plan.features
+            || before.plan.precision != prep.plan.precision
+        {
+            return Ok(false);
+        }
+        self.frame = GpuFrame::new(
+            self.ctx.clone(),
+            &prep.scene,
+            &prep.lights,
+            &prep.camera,
+            &prep.system,
+            &prep.surfaces,
+            &prep.maps,
+            &prep.plan.features,
+        )?;
+        self.frame.bind_solver(&self.solver);
+        Ok(true)
+    }
+
     fn prepare_lights(&mut self, prep: &mut Prepared) -> Result<()> {
         self.direct = None;
         if !prep.maps.views.is_empty() {

@@ -3,8 +3,9 @@
 //! [`Engine::update`] makes the engine follow, and the next iterations continue from the
 //! previous frame's solution (warm start).
 //!
-//! - **Only lights moved**: the elements and links are kept; the lights, plan, shadow maps and
-//!   backend are made anew, the solution carries over row for row.
+//! - **Only lights moved**: the elements and links are kept; the lights, plan and shadow maps
+//!   are made anew, the backend keeps its tables (the GPU makes only its frame anew) unless the
+//!   plan's passes or precision changed, and the solution carries over row for row.
 //! - **Keyframed objects moved along their keyframes** (`set_time`): the **bounded link mesh**
 //!   ([`crate::bound`]). The scene was linked once, at preparation, for the worst case over the
 //!   whole motion (moving objects are their own subtrees); an update moves the elements and
@@ -169,9 +170,10 @@ impl Engine {
         let t1 = Instant::now();
         // A camera a host set (Engine::set_camera) stays: the re-prepared scene has its own.
         prep.camera = self.prep.camera.clone();
-        // A backend that can follow the moved system in place keeps its tables (CPU); the
-        // others are made anew for it.
-        if !(bounded && self.backend.follow(&self.prep, &prep)?) {
+        // A backend that can follow the moved system in place keeps its tables (CPU along the
+        // bound and where only lights moved; GPU where only lights moved); the others are made
+        // anew for it.
+        if !((bounded || still) && self.backend.follow(&self.prep, &prep)?) {
             self.backend = backend::create(&self.options, &mut prep, ctx)?;
         }
         let backend_ms = ms(t1);
