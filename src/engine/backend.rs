@@ -65,6 +65,14 @@ pub trait Backend {
             "moving objects and lights need the antiradiance method".into(),
         ))
     }
+    /// Continues from the solution the backend holds after it followed a move
+    /// ([`Backend::follow`] returned true): the next iterations start from it (§3.3), as
+    /// [`Backend::warm_start`] with the same table would, without handing it over.
+    fn keep_solution(&mut self, _prep: &Prepared) -> Result<()> {
+        Err(crate::error::Error::Invalid(
+            "moving objects and lights need the antiradiance method".into(),
+        ))
+    }
     /// Follows `prep` after its objects moved from where `before` had them along a bounded
     /// link mesh (same nodes, links and table shapes; new geometry and form factors,
     /// [`crate::bound`]), or after only its lights moved (same system), keeping its state; or

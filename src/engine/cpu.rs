@@ -127,6 +127,13 @@ impl Backend for CpuBackend {
         Ok(())
     }
 
+    fn keep_solution(&mut self, _: &Prepared) -> Result<()> {
+        let state = self.state.as_mut().expect("state present");
+        state.residuals.clear();
+        state.energies.clear();
+        Ok(())
+    }
+
     fn follow(&mut self, before: &Prepared, prep: &Prepared) -> Result<bool> {
         // The solver reads the system at every iteration: only the ray caster holds geometry.
         self.caster = RayCaster::new(&prep.system);

@@ -28,13 +28,31 @@ pub struct GpuBackend {
     direct: Option<Table>,
     tuning: GpuTuning,
     pending: Vec<(String, f64)>,
+    /// After a follow that left every shadow view as it was: the maps' distances, reused
+    /// instead of rendered and read back.
+    kept_maps: Option<Vec<f32>>,
+    /// Where [`Backend::follow`] records the solver's uploads (an embedding host's command
+    /// buffer, [`super::Engine::record_update`]); `None`: submitted at once.
+    record_into: Option<vk::CommandBuffer>,
+    last_follow: FollowReport,
+}
+
+/// What the last [`Backend::follow`] of the GPU backend did.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct FollowReport {
+    /// The solver kept its tables and solution and took the moved links in place.
+    pub in_place: bool,
+    /// Bytes of link records, attributes and lobe factors uploaded (0 where only lights moved).
+    pub uploaded_bytes: u64,
+    /// Shadow views drawn again, of all views.
+    pub shadow_views: (usize, usize),
 }
 
 impl GpuBackend {
     /// Creates the solver's and the frame's resources for `prep` on `ctx`.
     pub fn new(ctx: Arc<Context>, prep: &Prepared, tuning: GpuTuning) -> Result<Self> {
         let solver = Self::make_solver(&ctx, prep, prep.plan.precision, tuning)?;
-        let frame = GpuFrame::new(
+        let mut frame = GpuFrame::new(
             ctx.clone(),
             &prep.scene,
             &prep.lights,
@@ -52,6 +70,9 @@ impl GpuBackend {
             direct: None,
             tuning,
             pending: Vec::new(),
+            kept_maps: None,
+            record_into: None,
+            last_follow: FollowReport::default(),
         })
     }
 
@@ -94,6 +115,17 @@ impl GpuBackend {
     /// The frame (for hosts presenting its output image, and reading its timestamps).
     pub fn frame(&mut self) -> &mut GpuFrame {
         &mut self.frame
+    }
+
+    /// What the last update's follow did ([`FollowReport`]).
+    pub fn last_follow(&self) -> FollowReport {
+        self.last_follow
+    }
+
+    /// Records the solver's uploads of the next follow into `cmd` (a host's command buffer,
+    /// submitted after this update) instead of submitting them; `None` submits them at once.
+    pub fn record_follow_into(&mut self, cmd: Option<vk::CommandBuffer>) {
+        self.record_into = cmd;
     }
 
     /// The context.
@@ -155,25 +187,39 @@ impl Backend for GpuBackend {
     }
 
     fn follow(&mut self, before: &Prepared, prep: &Prepared) -> Result<bool> {
-        // Only lights moved (the geometry, hence the system and its tables, is the same) and
-        // the solver was planned for the same passes and precision: keep the solver and its
-        // tables, make only the frame (lights, shadow views) anew. Moved objects change the
-        // link records: the backend is made anew for them.
-        let still = before
-            .scene
-            .meshes
-            .iter()
-            .zip(&prep.scene.meshes)
-            .all(|(a, b)| a.positions == b.positions)
-            && before.scene.meshes.len() == prep.scene.meshes.len();
-        if !still
-            || before.plan.features != prep.plan.features
+        // The solver was planned for these passes and precision: it keeps its tables and
+        // solution. Where objects moved along the bound it takes the new link records,
+        // normals and lobe factors in place; where only lights moved, nothing of it changes.
+        if before.plan.features != prep.plan.features
             || before.plan.precision != prep.plan.precision
         {
             return Ok(false);
         }
-        self.frame = GpuFrame::new(
-            self.ctx.clone(),
+        let still = before.scene.meshes.len() == prep.scene.meshes.len()
+            && before
+                .scene
+                .meshes
+                .iter()
+                .zip(&prep.scene.meshes)
+                .all(|(a, b)| a.positions == b.positions);
+        let mut report = FollowReport {
+            in_place: true,
+            ..Default::default()
+        };
+        let mut moved = Vec::new();
+        if !still {
+            let uploads = match self.record_into {
+                Some(cmd) => self.solver.record_follow(cmd, &prep.system)?,
+                None => self.solver.follow(&prep.system)?,
+            };
+            let Some(u) = uploads else {
+                return Ok(false);
+            };
+            report.uploaded_bytes = u.bytes;
+            moved = crate::bound::moving_spheres(&before.system);
+            moved.extend(crate::bound::moving_spheres(&prep.system));
+        }
+        let kept = self.frame.follow(
             &prep.scene,
             &prep.lights,
             &prep.camera,
@@ -181,19 +227,48 @@ impl Backend for GpuBackend {
             &prep.surfaces,
             &prep.maps,
             &prep.plan.features,
+            &moved,
         )?;
-        self.frame.bind_solver(&self.solver);
+        if !kept {
+            self.frame = GpuFrame::new(
+                self.ctx.clone(),
+                &prep.scene,
+                &prep.lights,
+                &prep.camera,
+                &prep.system,
+                &prep.surfaces,
+                &prep.maps,
+                &prep.plan.features,
+            )?;
+            self.frame.bind_solver(&self.solver);
+        }
+        self.kept_maps = (before.maps.views == prep.maps.views && !before.maps.data.is_empty())
+            .then(|| before.maps.data.clone());
+        report.shadow_views = (self.frame.shadow_views_to_render(), prep.maps.views.len());
+        self.last_follow = report;
         Ok(true)
+    }
+
+    fn keep_solution(&mut self, _: &Prepared) -> Result<()> {
+        // The images hold the solution; a new source scale has rescaled it (set_direct).
+        Ok(())
     }
 
     fn prepare_lights(&mut self, prep: &mut Prepared) -> Result<()> {
         self.direct = None;
+        let kept = self.kept_maps.take();
         if !prep.maps.views.is_empty() {
-            self.frame.render_shadow_maps()?;
-            let t = self.frame.timings().to_vec();
-            self.collect(&t);
-            let atlas = self.frame.read_shadow_maps()?;
-            prep.maps.set_from_atlas(&atlas);
+            match kept {
+                // No view can have changed: the last maps hold.
+                Some(data) if self.frame.shadow_views_to_render() == 0 => prep.maps.data = data,
+                _ => {
+                    self.frame.render_shadow_maps()?;
+                    let t = self.frame.timings().to_vec();
+                    self.collect(&t);
+                    let atlas = self.frame.read_shadow_maps()?;
+                    prep.maps.set_from_atlas(&atlas);
+                }
+            }
             self.direct = Some(direct_in_table(&prep.system, &prep.lights, &prep.maps));
         }
         self.set_sources(prep)

@@ -136,7 +136,6 @@ impl Engine {
         };
         let ms = |t: Instant| t.elapsed().as_secs_f64() * 1e3;
         let t = Instant::now();
-        let old = self.backend.i_ex()?;
         let ctx = self.backend.as_gpu().map(|g| g.context().clone());
         let memory = ctx.as_ref().map(|c| c.info.device_local_bytes);
         // Only lights moved: the elements and links stay (no relinking), the solution carries
@@ -155,14 +154,12 @@ impl Engine {
             self.prep.moved(&scene, &self.options)?
         };
         let bounded = followed.is_some();
-        let (mut prep, warm) = if still {
-            (self.prep.relit(&scene, &self.options)?, Some(old))
+        let mut prep = if still {
+            self.prep.relit(&scene, &self.options)?
         } else if let Some(prep) = followed {
-            (prep, Some(old))
+            prep
         } else {
-            let prep = Prepared::new(&scene, &self.options, memory, &Silent)?;
-            let warm = carry_over(&self.prep.system, &prep.system, &old);
-            (prep, warm)
+            Prepared::new(&scene, &self.options, memory, &Silent)?
         };
         self.relinked = !still && !bounded;
         self.placed = false;
@@ -170,12 +167,23 @@ impl Engine {
         let t1 = Instant::now();
         // A camera a host set (Engine::set_camera) stays: the re-prepared scene has its own.
         prep.camera = self.prep.camera.clone();
-        // A backend that can follow the moved system in place keeps its tables (CPU along the
-        // bound and where only lights moved; GPU where only lights moved); the others are made
-        // anew for it.
-        if !((bounded || still) && self.backend.follow(&self.prep, &prep)?) {
+        // A backend that can follow the moved system in place keeps its tables and solution
+        // (both backends, along the bound and where only lights moved); the others are made
+        // anew for it, from the previous solution read back (and, relinked, mapped leaf by
+        // leaf onto the new hierarchy).
+        let kept = (bounded || still) && self.backend.follow(&self.prep, &prep)?;
+        let warm = if kept {
+            None
+        } else {
+            let old = self.backend.i_ex()?;
+            let warm = if self.relinked {
+                carry_over(&self.prep.system, &prep.system, &old)
+            } else {
+                Some(old)
+            };
             self.backend = backend::create(&self.options, &mut prep, ctx)?;
-        }
+            warm
+        };
         let backend_ms = ms(t1);
         let t2 = Instant::now();
         let backend = &mut self.backend;
@@ -183,6 +191,7 @@ impl Engine {
         let lights_ms = ms(t2);
         let t3 = Instant::now();
         match &warm {
+            _ if kept => backend.keep_solution(&prep)?,
             Some(table) => backend.warm_start(&prep, table)?,
             None => backend.initialize(&prep)?,
         }
@@ -194,17 +203,28 @@ impl Engine {
             carry_ms: ms(t3),
             total_ms: ms(t),
         };
-        self.warm = warm.is_some();
+        self.warm = kept || warm.is_some();
         Ok(())
     }
 
-    /// For hosts recording into their own command buffer: performs [`Engine::update`] on the
-    /// host and records nothing into `cmd`. On the GPU backend the update re-creates the tables
-    /// (host work and uploads that finish before this returns), so there is nothing left to
-    /// record; the next [`Engine::record_iterations`] continues from the carried-over solution.
+    /// For hosts recording into their own command buffer: performs [`Engine::update`], and
+    /// where the GPU backend follows a move along the bounded link mesh in place, records its
+    /// uploads (the changed link records, the leaves' normals and lobe factors) into `cmd`
+    /// instead of submitting them; the next [`Engine::record_iterations`] into `cmd` read
+    /// them. What the host needs back at once is still submitted here and waited for: the
+    /// moved frame geometry and the shadow maps (the leaves' direct light is computed from
+    /// them on the host) and the direct-light table. Where the backend is made anew (a pose
+    /// outside the bound, new passes), everything is uploaded here. The previous command
+    /// buffer into which an update was recorded must have completed.
     pub fn record_update(&mut self, cmd: vk::CommandBuffer) -> Result<()> {
-        let _ = cmd;
-        self.update()
+        if let Some(g) = self.backend.as_gpu() {
+            g.record_follow_into(Some(cmd));
+        }
+        let out = self.update();
+        if let Some(g) = self.backend.as_gpu() {
+            g.record_follow_into(None);
+        }
+        out
     }
 
     /// How long the last [`Engine::update`] took, by part (zero before any).

@@ -122,6 +122,24 @@ impl ShadowView {
         }
     }
 
+    /// Whether a sphere (`center`, `radius`) may show in this view: conservative, the view's
+    /// square taken as the cone around its diagonal (perspective) or its square widened by
+    /// the radius (orthographic); a sphere around the origin always may.
+    pub fn may_see(&self, center: DVec3, radius: f64) -> bool {
+        let d = center - self.origin;
+        if self.ortho {
+            return d.dot(self.right).abs() <= self.half + radius
+                && d.dot(self.up).abs() <= self.half + radius
+                && d.dot(self.forward) >= -radius;
+        }
+        let len = d.length();
+        if len <= radius {
+            return true;
+        }
+        let off_axis = (d.dot(self.forward) / len).clamp(-1.0, 1.0).acos();
+        off_axis <= (self.half * std::f64::consts::SQRT_2).atan() + (radius / len).asin()
+    }
+
     /// World size of one texel at `p`.
     pub fn texel_size(&self, p: DVec3, size: u32) -> f64 {
         let scale = if self.ortho {

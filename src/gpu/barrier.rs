@@ -104,7 +104,9 @@ pub fn after_uploads(ctx: &Context, cmd: vk::CommandBuffer) {
         .src_stage_mask(vk::PipelineStageFlags2::COPY)
         .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
         .dst_stage_mask(
-            vk::PipelineStageFlags2::VERTEX_INPUT | vk::PipelineStageFlags2::FRAGMENT_SHADER,
+            vk::PipelineStageFlags2::VERTEX_INPUT
+                | vk::PipelineStageFlags2::VERTEX_SHADER
+                | vk::PipelineStageFlags2::FRAGMENT_SHADER,
         )
         .dst_access_mask(
             vk::AccessFlags2::VERTEX_ATTRIBUTE_READ | vk::AccessFlags2::SHADER_STORAGE_READ,

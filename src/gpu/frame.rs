@@ -29,6 +29,8 @@ use crate::system::System;
 use ash::vk;
 use std::sync::Arc;
 
+mod follow;
+
 /// Pipelines of the frame passes.
 pub struct FramePipelines {
     /// Shadow-map views: linear distance, depth-tested.
@@ -85,10 +87,26 @@ impl FrameData {
         }
     }
 
-    fn upload(&self, ctx: &Arc<Context>) -> Result<FrameBuffers<Buffer>> {
+    /// Each buffer's name, bytes and use.
+    fn contents(&self) -> FrameBuffers<(&'static str, &[u8], vk::BufferUsageFlags)> {
         let vb = vk::BufferUsageFlags::VERTEX_BUFFER;
         let sb = vk::BufferUsageFlags::STORAGE_BUFFER;
-        let put = |name: &str, bytes: &[u8], usage| {
+        FrameBuffers {
+            corners: ("element corners", as_bytes(&self.corners), vb),
+            splats: ("splat instances", as_bytes(&self.splats), vb),
+            materials: ("frame materials", as_bytes(&self.materials), sb),
+            bin_centers: ("frame bin centers", as_bytes(&self.bin_centers), sb),
+            elements: ("frame elements", as_bytes(&self.elements), sb),
+            adj_offsets: ("shared-vertex offsets", as_bytes(&self.adj_offsets), sb),
+            adj_list: ("shared-vertex elements", as_bytes(&self.adj_list), sb),
+            lights: ("lights", as_bytes(&self.lights), sb),
+            shadow_views: ("shadow views", as_bytes(&self.shadow_views), sb),
+            emitters: ("emitting triangles", as_bytes(&self.emitters), sb),
+        }
+    }
+
+    fn upload(&self, ctx: &Arc<Context>) -> Result<FrameBuffers<Buffer>> {
+        self.contents().try_map(|&(name, bytes, usage)| {
             BufferDesc {
                 name: name.into(),
                 size: bytes.len() as u64,
@@ -96,18 +114,6 @@ impl FrameData {
                 purpose: Purpose::FrameBuffers,
             }
             .upload(ctx, bytes)
-        };
-        Ok(FrameBuffers {
-            corners: put("element corners", as_bytes(&self.corners), vb)?,
-            splats: put("splat instances", as_bytes(&self.splats), vb)?,
-            materials: put("frame materials", as_bytes(&self.materials), sb)?,
-            bin_centers: put("frame bin centers", as_bytes(&self.bin_centers), sb)?,
-            elements: put("frame elements", as_bytes(&self.elements), sb)?,
-            adj_offsets: put("shared-vertex offsets", as_bytes(&self.adj_offsets), sb)?,
-            adj_list: put("shared-vertex elements", as_bytes(&self.adj_list), sb)?,
-            lights: put("lights", as_bytes(&self.lights), sb)?,
-            shadow_views: put("shadow views", as_bytes(&self.shadow_views), sb)?,
-            emitters: put("emitting triangles", as_bytes(&self.emitters), sb)?,
         })
     }
 }
@@ -126,6 +132,15 @@ pub struct GpuFrame {
     features: Features,
     /// Each shadow view's map in the atlas: x, y, side.
     shadow_rects: Vec<[u32; 3]>,
+    /// The shadow views the maps are (to be) rendered for.
+    views: Vec<crate::frame::shadow::ShadowView>,
+    /// After a follow: the views the next shadow render draws (the others' maps are kept);
+    /// `None`: every view.
+    only: Option<Vec<bool>>,
+    /// Staging buffers of the last follow's uploads.
+    staged: super::staged::Staged,
+    /// The solver's I_total the set points at ([`GpuFrame::bind_solver`]).
+    i_total: Option<vk::ImageView>,
     timings: Vec<(String, f64)>,
     setup: super::solver::SetupTimes,
     sampler: Owned<vk::Sampler>,
@@ -220,6 +235,10 @@ impl GpuFrame {
                 .iter()
                 .map(|v| [v.atlas.0, v.atlas.1, v.size])
                 .collect(),
+            views: maps.views.clone(),
+            only: None,
+            i_total: None,
+            staged: super::staged::Staged::new(c),
             constants: constants(scene, lights.len(), camera, sys),
             profiler: Profiler::new(c, 16)?,
             ctx: ctx.clone(),
@@ -303,9 +322,11 @@ impl GpuFrame {
         pipelines::write_set(&self.ctx, self.set, self.sampler.raw(), &images, &buffers);
     }
 
-    /// Records the shadow maps of every light view.
+    /// Records the shadow maps of every light view (after [`GpuFrame::follow`]: of the views
+    /// it found changed).
     pub fn record_shadow_maps(&mut self, cmd: vk::CommandBuffer) {
-        if self.shadow_rects.is_empty() {
+        if self.shadow_rects.is_empty() || self.shadow_views_to_render() == 0 {
+            self.only = None;
             return;
         }
         let ctx = self.ctx.clone();
@@ -323,8 +344,10 @@ impl GpuFrame {
             self.buffers.corners.raw,
             self.corner_count,
             &self.shadow_rects,
+            self.only.as_deref(),
             self.constants,
         );
+        self.only = None;
         self.profiler.end(&ctx, cmd);
     }
 
@@ -399,8 +422,9 @@ impl GpuFrame {
     }
 
     /// Points the frame's set at `solver`'s I_total (once per solver; the image does not move).
-    pub fn bind_solver(&self, solver: &GpuSolver) {
-        self.write_set(Some(solver.images().i_total.1));
+    pub fn bind_solver(&mut self, solver: &GpuSolver) {
+        self.i_total = Some(solver.images().i_total.1);
+        self.write_set(self.i_total);
     }
 
     /// Draws the frame from `solver`'s current I_total, waits, and reads it back.

@@ -328,7 +328,7 @@ impl Buffer {
     }
 
     /// A host-visible buffer holding `bytes`, the source of a copy.
-    fn staging(ctx: &Arc<Context>, name: &str, bytes: &[u8]) -> Result<Self> {
+    pub(crate) fn staging(ctx: &Arc<Context>, name: &str, bytes: &[u8]) -> Result<Self> {
         let mut s = Self::new(
             ctx,
             &format!("{name} (staging)"),
@@ -536,7 +536,7 @@ pub fn range_for(format: vk::Format) -> vk::ImageSubresourceRange {
     }
 }
 
-fn copy_region(extent: vk::Extent2D) -> vk::BufferImageCopy {
+pub(crate) fn copy_region(extent: vk::Extent2D) -> vk::BufferImageCopy {
     vk::BufferImageCopy::default()
         .image_subresource(vk::ImageSubresourceLayers {
             aspect_mask: vk::ImageAspectFlags::COLOR,
@@ -561,6 +561,12 @@ macro_rules! resource_set {
             /// Every field, in declaration order.
             pub fn iter(&self) -> impl Iterator<Item = &T> {
                 [$(&self.$field),+].into_iter()
+            }
+
+            /// Every field, writable, in declaration order.
+            #[allow(dead_code)]
+            pub fn iter_mut(&mut self) -> impl Iterator<Item = &mut T> {
+                [$(&mut self.$field),+].into_iter()
             }
 
             /// The same set with every field mapped by `f` (stops at the first error).

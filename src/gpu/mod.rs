@@ -19,6 +19,7 @@ pub mod reduce;
 pub mod resources;
 pub mod shaders;
 pub mod solver;
+pub mod staged;
 pub mod tables;
 pub mod work;
 

@@ -421,6 +421,13 @@ impl Resources {
         Ok(res)
     }
 
+    /// Points both descriptor sets at the buffers again (after one was made anew).
+    pub fn rewrite_sets(&self, ctx: &Context) {
+        for p in 0..2 {
+            self.write_set(ctx, p);
+        }
+    }
+
     /// Writes set `p`: every image binding and the two storage buffers.
     fn write_set(&self, ctx: &Context, p: usize) {
         let im = &self.images;

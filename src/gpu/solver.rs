@@ -5,7 +5,6 @@ use super::context::Context;
 use super::diagnostics::BlendRounding;
 use super::layout::{mode, PassConstants, FLAG_HALF};
 use super::memory::MemoryReport;
-use super::pack::encode;
 use super::passes::{self, Pass, PipelineSpec, SolverPipelines};
 use super::pipelines::Layouts;
 use super::profiler::Profiler;
@@ -22,7 +21,10 @@ use ash::vk;
 use glam::DVec3;
 use std::sync::Arc;
 
+mod follow;
 mod transfer;
+
+pub use follow::FollowUploads;
 
 /// GPU solver options.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -84,6 +86,13 @@ pub struct GpuSolver {
     features: Features,
     /// Whether each row's depth is odd (where push leaves its L_push).
     depth_parity: Vec<bool>,
+    /// Whether each row is a leaf's (its I_ex is in the ping-pong pair).
+    leaf_rows: Vec<bool>,
+    /// Whether the images hold a solution (initialized, uploaded or iterated): a new source
+    /// scale then rescales it.
+    live: bool,
+    /// Staging buffers of the last recorded follow.
+    staged: super::staged::Staged,
     reducer: Reducer,
     work: super::work::Work,
     setup: SetupTimes,
@@ -176,6 +185,7 @@ impl GpuSolver {
             },
             ..Default::default()
         };
+        let staged = super::staged::Staged::new(&ctx);
         Ok(Self {
             ctx,
             res,
@@ -198,6 +208,9 @@ impl GpuSolver {
                 .iter()
                 .map(|n| n.depth % 2 == 1)
                 .collect(),
+            leaf_rows: sys.leaf_slot.iter().map(|&s| s != u32::MAX).collect(),
+            live: false,
+            staged,
             reducer,
             work,
             setup,
@@ -272,45 +285,6 @@ impl GpuSolver {
         Range::overflow_limit(self.precision, self.scale)
     }
 
-    /// Uploads the direct-light table at the current source scale (no-op without one).
-    fn upload_direct(&mut self) -> Result<()> {
-        let Some(table) = &self.direct else {
-            return Ok(());
-        };
-        let l = *self.res.layout();
-        let bytes = encode(
-            self.res.plan.format,
-            &l.from_table_scaled(table, self.scale),
-        );
-        self.res.images.direct.upload(&bytes)
-    }
-
-    fn update_scale(&mut self) -> Result<()> {
-        let direct_max = self.direct.as_ref().map_or(0.0, |t| {
-            t.data.iter().map(|v| v.max_element()).fold(0.0, f64::max)
-        });
-        let range = Range {
-            brightest: self
-                .sys_range
-                .brightest
-                .max(self.environment.max_element())
-                .max(direct_max),
-            dimmest: match (self.sys_range.dimmest, self.environment.max_element()) {
-                (d, e) if e > 0.0 => Some(d.map_or(e, |d| d.min(e))),
-                (d, _) => d,
-            },
-            ..self.sys_range
-        };
-        let s = range.scale();
-        let e = self.environment * s;
-        self.constants.environment = [e.x as f32, e.y as f32, e.z as f32, s as f32];
-        if s != self.scale {
-            self.scale = s;
-            self.upload_direct()?;
-        }
-        Ok(())
-    }
-
     /// Starts a frame's timestamps; call once per command buffer before the `record_*` calls.
     pub fn begin_frame(&mut self, cmd: vk::CommandBuffer) {
         self.profiler.reset(&self.ctx, cmd);
@@ -334,6 +308,7 @@ impl GpuSolver {
     /// environment's antiradiance, then pull (as [`crate::solver::CpuSolver::initialize`]).
     pub fn record_initialize(&mut self, cmd: vk::CommandBuffer) -> Result<()> {
         self.prepare(&[mode::BOTH])?;
+        self.live = true;
         self.record(cmd, None, mode::BOTH);
         Ok(())
     }

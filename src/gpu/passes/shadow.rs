@@ -43,7 +43,8 @@ pub fn pipeline(
     create(ctx, layout, &desc)
 }
 
-/// Records every view, each into its atlas square `rects[v]` (x, y, side).
+/// Records the views, each into its atlas square `rects[v]` (x, y, side): every view, or with
+/// `only`, the views it marks (their squares cleared first, the others' maps kept).
 #[allow(clippy::too_many_arguments)]
 pub fn record(
     p: &FramePass<'_>,
@@ -52,6 +53,7 @@ pub fn record(
     corners: vk::Buffer,
     corner_count: u32,
     rects: &[[u32; 3]],
+    only: Option<&[bool]>,
     mut constants: FrameConstants,
 ) {
     transition(
@@ -62,14 +64,21 @@ pub fn record(
             (&mut im.shadow_depth, Access::Depth),
         ],
     );
+    let (color, depth) = match only {
+        Some(_) => (Load::Keep, Load::Keep),
+        None => (Load::ClearTo(EMPTY), Load::Clear),
+    };
     begin_rendering_with_depth(
         p.ctx,
         p.cmd,
-        &[(&im.shadow_map, Load::ClearTo(EMPTY))],
-        Some((&im.shadow_depth, Load::Clear)),
+        &[(&im.shadow_map, color)],
+        Some((&im.shadow_depth, depth)),
     );
     p.bind(pipeline, &constants);
     for (v, &[x, y, size]) in rects.iter().enumerate() {
+        if only.is_some_and(|o| !o[v]) {
+            continue;
+        }
         let band = vk::Rect2D {
             offset: vk::Offset2D {
                 x: x as i32,
@@ -94,6 +103,9 @@ pub fn record(
                 }],
             );
             p.ctx.device.cmd_set_scissor(p.cmd, 0, &[band]);
+            if only.is_some() {
+                clear_square(p, band);
+            }
         }
         constants.misc[1] = v as u32;
         p.push(&constants);
@@ -101,4 +113,39 @@ pub fn record(
     }
     end_rendering(p.ctx, p.cmd);
     transition(p.ctx, p.cmd, &mut [(&mut im.shadow_map, Access::Sampled)]);
+}
+
+/// Clears one view's square of the atlas (nothing seen) and of its depth (far: reversed depth 0).
+fn clear_square(p: &FramePass<'_>, rect: vk::Rect2D) {
+    let attachments = [
+        vk::ClearAttachment {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            color_attachment: 0,
+            clear_value: vk::ClearValue {
+                color: vk::ClearColorValue {
+                    float32: [EMPTY; 4],
+                },
+            },
+        },
+        vk::ClearAttachment {
+            aspect_mask: vk::ImageAspectFlags::DEPTH,
+            color_attachment: 0,
+            clear_value: vk::ClearValue {
+                depth_stencil: vk::ClearDepthStencilValue {
+                    depth: 0.0,
+                    stencil: 0,
+                },
+            },
+        },
+    ];
+    let rects = [vk::ClearRect {
+        rect,
+        base_array_layer: 0,
+        layer_count: 1,
+    }];
+    unsafe {
+        p.ctx
+            .device
+            .cmd_clear_attachments(p.cmd, &attachments, &rects)
+    };
 }

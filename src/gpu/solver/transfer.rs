@@ -7,6 +7,7 @@ use crate::error::Result;
 use crate::gpu::memory::Image;
 use crate::gpu::pack::{decode, encode};
 use crate::gpu::resources::SolverImages;
+use crate::plan::range::Range;
 use crate::solver::Table;
 use crate::system::System;
 
@@ -61,11 +62,18 @@ impl GpuSolver {
     /// them): a warm start from the previous frame's solution when objects moved (§3.3). Leaf
     /// rows go to the current leaf image, cluster rows to their depth parity's image.
     pub fn upload_i_ex(&mut self, sys: &System, table: &Table) -> Result<()> {
+        debug_assert_eq!(sys.rows(), self.leaf_rows.len());
+        self.put_i_ex(table)
+    }
+
+    /// [`GpuSolver::upload_i_ex`] for this solver's rows.
+    fn put_i_ex(&mut self, table: &Table) -> Result<()> {
+        self.live = true;
         let l = *self.res.layout();
         let zero = || Table::zeros(table.rows(), table.bins);
         let (mut leaf, mut even, mut odd) = (zero(), zero(), zero());
         for r in 0..table.rows() {
-            let dst = if sys.leaf_slot[r] != u32::MAX {
+            let dst = if self.leaf_rows[r] {
                 &mut leaf
             } else if self.depth_parity[r] {
                 &mut odd
@@ -103,6 +111,57 @@ impl GpuSolver {
             }
         }
         Ok(self.unscale(t))
+    }
+
+    /// Uploads the direct-light table at the current source scale (no-op without one).
+    pub(super) fn upload_direct(&mut self) -> Result<()> {
+        let Some(table) = &self.direct else {
+            return Ok(());
+        };
+        let l = *self.res.layout();
+        let bytes = encode(
+            self.res.plan.format,
+            &l.from_table_scaled(table, self.scale),
+        );
+        self.res.images.direct.upload(&bytes)
+    }
+
+    /// Chooses the power-of-two source scale for the system's range, the environment and the
+    /// direct light; where it changes, the direct light is uploaded again and a solution the
+    /// images hold (a warm start across an update) is read back and uploaded at the new scale.
+    pub(super) fn update_scale(&mut self) -> Result<()> {
+        let direct_max = self.direct.as_ref().map_or(0.0, |t| {
+            t.data.iter().map(|v| v.max_element()).fold(0.0, f64::max)
+        });
+        let range = Range {
+            brightest: self
+                .sys_range
+                .brightest
+                .max(self.environment.max_element())
+                .max(direct_max),
+            dimmest: match (self.sys_range.dimmest, self.environment.max_element()) {
+                (d, e) if e > 0.0 => Some(d.map_or(e, |d| d.min(e))),
+                (d, _) => d,
+            },
+            ..self.sys_range
+        };
+        let s = range.scale();
+        let e = self.environment * s;
+        self.constants.environment = [e.x as f32, e.y as f32, e.z as f32, s as f32];
+        if s != self.scale {
+            let held = if self.live {
+                Some((self.read_i_ex()?, self.read_i_total()?))
+            } else {
+                None
+            };
+            self.scale = s;
+            self.upload_direct()?;
+            if let Some((i_ex, i_total)) = held {
+                self.put_i_ex(&i_ex)?;
+                self.upload_i_total(&i_total)?;
+            }
+        }
+        Ok(())
     }
 
     fn unscale(&self, mut t: Table) -> Table {

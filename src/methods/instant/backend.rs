@@ -166,7 +166,7 @@ impl GpuInstant {
             },
         )?;
         display.upload_i_total(&zeros(prep))?;
-        let frame = GpuFrame::new(
+        let mut frame = GpuFrame::new(
             ctx.clone(),
             &prep.scene,
             &prep.lights,

@@ -89,7 +89,7 @@ impl GpuShooting {
                 ..Default::default()
             },
         )?;
-        let frame = GpuFrame::new(
+        let mut frame = GpuFrame::new(
             ctx.clone(),
             &prep.scene,
             &prep.lights,

@@ -1,0 +1,99 @@
+//! The frame following a moved scene (§3.3): its buffers written again in place (the moved
+//! corners, elements, lights and shadow views) and, of the shadow maps, only the views that
+//! can have changed marked for the next shadow render: a light's view that moved, or one that
+//! may see a moved object before or after its move.
+
+use super::{constants, FrameData, GpuFrame};
+use crate::error::Result;
+use crate::frame::shadow::ShadowMaps;
+use crate::frame::surfaces::Surfaces;
+use crate::gpu::memory::Buffer;
+use crate::gpu::pack;
+use crate::plan::Features;
+use crate::scene::{Camera, Light, Scene};
+use crate::system::System;
+use ash::vk;
+use glam::DVec3;
+use gpu_allocator::MemoryLocation;
+
+impl GpuFrame {
+    /// Takes the moved scene (its system, surfaces, `lights` and shadow `maps` views), keeping
+    /// the images, pipelines and the shadow maps of views that cannot have changed: views equal
+    /// to the last ones that meet none of the `moved` spheres (around each moved object before
+    /// and after its move). Returns false, changing nothing, where the images would differ (a
+    /// new camera size, features or atlas): the frame must be made anew.
+    #[allow(clippy::too_many_arguments)]
+    pub fn follow(
+        &mut self,
+        scene: &Scene,
+        lights: &[Light],
+        camera: &Camera,
+        sys: &System,
+        surf: &Surfaces,
+        maps: &ShadowMaps,
+        features: &Features,
+        moved: &[(DVec3, f64)],
+    ) -> Result<bool> {
+        let same_images = *features == self.features
+            && Self::describe(camera, features, maps)
+                .iter()
+                .zip(self.images.iter())
+                .all(|(d, im)| *d == im.desc);
+        if !same_images {
+            return Ok(false);
+        }
+        let data = FrameData::new(scene, lights, sys, surf, maps, features);
+        let ctx = self.ctx.clone();
+        self.staged.release();
+        let mut grown = false;
+        let mut result: Result<()> = Ok(());
+        let (buffers, staged) = (&mut self.buffers, &mut self.staged);
+        ctx.submit_and_wait(|cmd| {
+            result = (|| {
+                for (buf, &(name, bytes, usage)) in buffers.iter_mut().zip(data.contents().iter()) {
+                    if bytes.len() as u64 > buf.size {
+                        grown = true;
+                        *buf = Buffer::new(
+                            &ctx,
+                            name,
+                            bytes.len() as u64,
+                            usage | vk::BufferUsageFlags::TRANSFER_DST,
+                            MemoryLocation::GpuOnly,
+                        )?;
+                    }
+                    staged.buffer(cmd, buf, bytes)?;
+                }
+                staged.finish(cmd);
+                Ok(())
+            })();
+        })?;
+        result?;
+        self.staged.release();
+        self.corner_count = data.corners.len() as u32;
+        self.splat_count = pack::splat_instances(surf, features.splat).len() as u32;
+        self.constants = constants(scene, lights.len(), camera, sys);
+        let only: Vec<bool> = maps
+            .views
+            .iter()
+            .enumerate()
+            .map(|(i, v)| {
+                self.views.get(i) != Some(v) || moved.iter().any(|&(c, r)| v.may_see(c, r))
+            })
+            .collect();
+        self.views = maps.views.clone();
+        self.only = Some(only);
+        if grown {
+            // The set points at the storage buffers; keep the I_total binding.
+            self.write_set(self.i_total);
+        }
+        Ok(true)
+    }
+
+    /// Views the next shadow render draws.
+    pub fn shadow_views_to_render(&self) -> usize {
+        match &self.only {
+            Some(o) => o.iter().filter(|&&b| b).count(),
+            None => self.shadow_rects.len(),
+        }
+    }
+}

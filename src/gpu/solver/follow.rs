@@ -1,0 +1,158 @@
+//! The GPU solver following its system after objects moved along a bounded link mesh (§3.3,
+//! [`crate::System::follow`]): the nodes, rows and link pairs stay, so the tables (and with
+//! them the current solution) stay on the device; only the link records (form factors, bins,
+//! cone classes of the links touching a moving node), the leaves' normals and the glossy lobe
+//! factors are packed again and uploaded, recorded into a command buffer.
+
+use super::GpuSolver;
+use crate::error::Result;
+use crate::gpu::layout::as_bytes;
+use crate::gpu::memory::{Buffer, BufferDesc};
+use crate::gpu::pack::{self, encode};
+use crate::gpu::staged::Staged;
+use crate::gpu::tables::DrawData;
+use crate::plan::range::Range;
+use crate::system::System;
+use ash::vk;
+use glam::DVec3;
+use gpu_allocator::MemoryLocation;
+
+/// What one follow uploaded.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct FollowUploads {
+    /// Bytes staged and copied (link records, combos, runs, attributes, lobe factors).
+    pub bytes: u64,
+    /// Buffers made anew because the moved system's records no longer fit.
+    pub grown: usize,
+}
+
+/// Writes `bytes` into `buf` through `staged`, making the buffer anew (and `desc` with it)
+/// where it is too small; returns whether it did.
+fn rewrite(
+    staged: &mut Staged,
+    cmd: vk::CommandBuffer,
+    ctx: &std::sync::Arc<crate::gpu::Context>,
+    buf: &mut Buffer,
+    desc: &mut BufferDesc,
+    bytes: &[u8],
+) -> Result<bool> {
+    let grow = bytes.len() as u64 > buf.size;
+    if grow {
+        desc.size = bytes.len() as u64;
+        *buf = Buffer::new(
+            ctx,
+            &desc.name,
+            desc.size,
+            desc.usage | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+        )?;
+    }
+    staged.buffer(cmd, buf, bytes)?;
+    Ok(grow)
+}
+
+impl GpuSolver {
+    /// Takes `sys`, this solver's system after its objects moved along its bound, keeping the
+    /// tables and the current solution: records the uploads of the new link records, the
+    /// leaves' normals and lobe factors into `cmd` (their staging buffers live until the next
+    /// follow: `cmd` must have completed by then). Returns `None`, recording nothing, where
+    /// `sys` does not have this solver's rows, hierarchy and cone classes (the solver must be
+    /// made anew). The source scale may change with the system: see [`GpuSolver::set_direct`].
+    pub fn record_follow(
+        &mut self,
+        cmd: vk::CommandBuffer,
+        sys: &System,
+    ) -> Result<Option<FollowUploads>> {
+        let out = self.record_uploads(cmd, sys)?;
+        if out.is_some() {
+            self.rescale_for(sys)?;
+        }
+        Ok(out)
+    }
+
+    /// [`GpuSolver::record_follow`] submitted on the solver's queue, waiting for it.
+    pub fn follow(&mut self, sys: &System) -> Result<Option<FollowUploads>> {
+        let ctx = self.ctx.clone();
+        let mut out = Ok(None);
+        ctx.submit_and_wait(|cmd| out = self.record_uploads(cmd, sys))?;
+        let out = out?;
+        self.staged.release();
+        if out.is_some() {
+            // After the submission: a new scale may read the solution back and upload it.
+            self.rescale_for(sys)?;
+        }
+        Ok(out)
+    }
+
+    /// The source range of the moved system, and the scale it asks for.
+    fn rescale_for(&mut self, sys: &System) -> Result<()> {
+        self.sys_range = Range::of(sys, DVec3::ZERO, 0.0);
+        self.update_scale()
+    }
+
+    /// The uploads of [`GpuSolver::record_follow`], recorded (nothing submitted).
+    fn record_uploads(
+        &mut self,
+        cmd: vk::CommandBuffer,
+        sys: &System,
+    ) -> Result<Option<FollowUploads>> {
+        let layout = *self.res.layout();
+        if sys.rows() as u32 != layout.rows || sys.bins.count as u32 != layout.bins {
+            return Ok(None);
+        }
+        let draw = DrawData::new(sys, &layout, self.features.glossy_everywhere)?;
+        let old = self.res.draw();
+        let same_shape = draw.class_layer == old.class_layer
+            && draw.links.len() == old.links.len()
+            && draw.push == old.push
+            && draw.pull == old.pull
+            && draw.diffuse_quads == old.diffuse_quads
+            && draw.glossy_quads == old.glossy_quads
+            && draw.leaf_quads == old.leaf_quads;
+        if !same_shape {
+            return Ok(None);
+        }
+        self.staged.release();
+        let ctx = self.ctx.clone();
+        let res = &mut self.res;
+        let staged = &mut self.staged;
+        let (b, d) = (&mut res.buffers, &mut res.plan.buffers);
+        let mut grown = 0;
+        rewrite(
+            staged,
+            cmd,
+            &ctx,
+            &mut b.links,
+            &mut d.links,
+            as_bytes(&draw.links),
+        )?;
+        let combos = pack::padded(draw.combos.clone());
+        let runs = pack::padded(draw.runs.clone());
+        for (buf, desc, bytes) in [
+            (&mut b.combos, &mut d.combos, as_bytes(&combos)),
+            (&mut b.runs, &mut d.runs, as_bytes(&runs)),
+        ] {
+            grown += rewrite(staged, cmd, &ctx, buf, desc, bytes)? as usize;
+        }
+        staged.finish(cmd);
+        let (na, lf) = pack::attributes(sys, &layout);
+        let f32x4 = vk::Format::R32G32B32A32_SFLOAT;
+        let im = &mut res.images;
+        staged.image(cmd, &mut im.attr_normal_area, &encode(f32x4, &na))?;
+        staged.image(cmd, &mut im.attr_leaf, &encode(f32x4, &lf))?;
+        let (w, h) = (im.lobe_norm.extent.width, im.lobe_norm.extent.height);
+        if w * h > 1 {
+            let lobe = pack::lobe_factors(sys, &layout, w, h);
+            staged.image(cmd, &mut im.lobe_norm, as_bytes(&lobe))?;
+        }
+        res.plan.draw = draw;
+        if grown > 0 {
+            res.rewrite_sets(&ctx);
+        }
+        self.work = crate::gpu::work::Work::of(sys, &self.res.plan);
+        Ok(Some(FollowUploads {
+            bytes: self.staged.bytes(),
+            grown,
+        }))
+    }
+}
