@@ -6,13 +6,16 @@
 //!     cargo run --release --example embed -- [--frames N] [--exr OUT.exr] [--png OUT.png]
 //!
 //! The validation layer is on; any validation message fails the run (exit status 1). Per frame
-//! the block slides and the light moves (`Engine::set_object_transform`, `Engine::set_light`,
-//! `Engine::record_update`), and the solve continues from the previous frame's solution.
+//! the block slides along keyframes the host gave it in code and the light moves
+//! (`Engine::set_time`, `Engine::set_light`, `Engine::record_update`): the links were made for
+//! the block's whole motion, so the update follows it in place and records its uploads into the
+//! host's command buffer, and the solve continues from the previous frame's solution.
 
 use antiradiance::engine::{Engine, Options};
 use antiradiance::frame::Image;
 use antiradiance::gpu::{Context, HostDevice};
 use antiradiance::progress::Silent;
+use antiradiance::scene::animation::ObjectKey;
 use antiradiance::scene::{Light, Material, Scene};
 use ash::vk;
 use glam::{DMat4, DQuat, DVec3};
@@ -242,9 +245,17 @@ fn scene() -> Scene {
     for (i, f) in faces.into_iter().enumerate() {
         quad(&mut s, &format!("block{i}"), f, grey);
     }
-    // The block is one object that moves (its links are made for that; the room does not move).
+    // The block is one object that moves (its links are made for that; the room does not move):
+    // it slides 0.32 along x and turns 0.8 rad about its base over one second, the host's path.
     let block = s.add_object(first..s.meshes.len(), DMat4::IDENTITY, true);
     assert_eq!(block, BLOCK);
+    let key = |time: f64, x: f64, turn: f64| ObjectKey {
+        time,
+        translate: Some(DVec3::new(x, 0.0, 0.0)),
+        rotate: Some(DQuat::from_rotation_y(turn)),
+    };
+    s.set_object_keyframes(block, vec![key(0.0, 0.0, 0.0), key(1.0, 0.32, 0.8)])
+        .expect("valid keys");
     s.lights.push(Light::Point {
         position: LIGHT,
         intensity: DVec3::splat(3.0),
@@ -404,14 +415,14 @@ fn frames_loop(
             engine.gpu()?.begin(cmd);
             engine.record_initialize(cmd)?;
         } else {
-            // 2b. Later frames move the block (turning about its base) and the light from
-            //     the host's own data, and update: the next iterations continue from the
-            //     previous frame's solution. The update's work is done on the host before the
-            //     engine's commands are recorded (its GPU objects may be new: begin after it).
-            let x = 0.08 * frame as f64;
-            let place = DMat4::from_translation(DVec3::new(x, 0.0, 0.0))
-                * DMat4::from_quat(DQuat::from_rotation_y(0.2 * frame as f64));
-            engine.set_object_transform(BLOCK, place)?;
+            // 2b. Later frames move the block along its keys (a quarter second per frame) and
+            //     the light from the host's own data, and update: the next iterations continue
+            //     from the previous frame's solution. The update follows the block in place:
+            //     the moved link records and normals are uploaded by commands recorded into
+            //     `cmd`; the shadow maps and direct light are done before it returns (a pose
+            //     set with `set_object_transform` outside the keys would prepare the scene
+            //     anew, and its GPU objects may be new: begin after the update).
+            engine.set_time(0.25 * frame as f64)?;
             engine.set_light(
                 0,
                 Light::Point {
@@ -474,14 +485,22 @@ fn frames_loop(
             }
         }
         let passes: Vec<String> = sums.iter().map(|(n, ms)| format!("{n} {ms:.1}")).collect();
+        let update = if frame == 0 {
+            "none".to_string()
+        } else {
+            let f = gpu.last_follow();
+            format!(
+                "{:.0} ms, {}, {} bytes recorded, {}/{} shadow views drawn",
+                engine.update_times().total_ms,
+                if f.in_place { "in place" } else { "made anew" },
+                f.uploaded_bytes,
+                f.shadow_views.0,
+                f.shadow_views.1
+            )
+        };
         println!(
-            "frame {frame}: mean radiance {mean:.4}, {:.0} ms (update {:.0} ms); GPU ms: {}",
+            "frame {frame}: mean radiance {mean:.4}, {:.0} ms (update: {update}); GPU ms: {}",
             t.elapsed().as_secs_f64() * 1e3,
-            if frame == 0 {
-                0.0
-            } else {
-                engine.update_times().total_ms
-            },
             passes.join(", ")
         );
         image = Some(img);

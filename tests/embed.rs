@@ -46,6 +46,19 @@ fn embedding_example_runs_clean_and_draws_the_scene() {
         .filter_map(|l| l.split(',').next()?.parse().ok())
         .collect();
     assert_eq!(means.len(), 3, "{out}");
+    // The block moves along keys the host gave it: every update follows the bounded link mesh
+    // in place, its uploads recorded into the host's command buffer.
+    let updates: Vec<&str> = out
+        .lines()
+        .filter(|l| l.starts_with("frame ") && !l.starts_with("frame 0:"))
+        .collect();
+    assert_eq!(updates.len(), 2, "{out}");
+    for l in &updates {
+        assert!(
+            l.contains("in place") && !l.contains(" 0 bytes recorded"),
+            "the update did not follow in place: {l}"
+        );
+    }
     // The block and the light move every frame after the first: the picture changes (measured
     // +2.9% in the mean from the first frame to the third; bound a third of it).
     println!("mean radiance per frame: {means:?}");

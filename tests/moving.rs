@@ -247,6 +247,15 @@ fn gpu_follows_keyframed_moves_in_place() {
         );
         let f = g.last_follow();
         assert!(f.in_place && f.uploaded_bytes > 0, "t = {t}: {f:?}");
+        // The views not drawn again kept maps equal to drawing every view.
+        g.frame().render_shadow_maps().unwrap();
+        let atlas = g.frame().read_shadow_maps().unwrap();
+        let mut full = gpu.prepared().maps.clone();
+        full.set_from_atlas(&atlas);
+        assert!(
+            full.data == gpu.prepared().maps.data,
+            "t = {t}: stale shadow views"
+        );
         let e = rmse_over_mean(&gpu.draw().unwrap(), &cpu.draw().unwrap());
         println!(
             "t = {t}: GPU against CPU {e:.4} (after the first solve {start:.4}); uploaded {} bytes, shadow views drawn {:?}; update {:?}",
@@ -256,6 +265,38 @@ fn gpu_follows_keyframed_moves_in_place() {
         );
         assert!(e < 1.5 * start + 0.005, "t = {t}: {e} (start {start})");
     }
+    common::assert_clean(o.context.as_ref().unwrap());
+}
+
+/// A light made 64× brighter moves the GPU solver's power-of-two source scale: the solution it
+/// holds is rescaled with it, and the warm-started frame matches a fresh render.
+#[test]
+fn gpu_rescales_the_held_solution_when_a_light_brightens() {
+    let mut scene = bundled("cornell-box.toml");
+    let light = |i: f64| Light::Point {
+        position: DVec3::new(0.0, 1.5, 0.5),
+        intensity: DVec3::splat(i),
+    };
+    scene.lights.push(light(0.5));
+    let o = options(BackendKind::Gpu);
+    let mut engine = Engine::new(&scene, &o, &Silent).unwrap();
+    engine.render(&Silent).unwrap();
+    let before = engine.gpu().unwrap().solver().scale();
+    engine.set_light(0, light(32.0)).unwrap();
+    engine.update().unwrap();
+    let after = engine.gpu().unwrap().solver().scale();
+    assert!(engine.gpu().unwrap().last_follow().in_place);
+    assert_ne!(before, after, "the scale did not change: nothing tested");
+    engine.iterate(4).unwrap();
+    let frame = engine.draw().unwrap();
+    scene.lights[0] = light(32.0);
+    let scratch = Engine::new(&scene, &o, &Silent)
+        .unwrap()
+        .render(&Silent)
+        .unwrap();
+    let e = rmse_over_mean(&frame, &scratch.image);
+    println!("scale {before} -> {after}: RMSE/mean {e:.4} against a fresh render");
+    assert!(e < 0.05, "{e}");
     common::assert_clean(o.context.as_ref().unwrap());
 }
 

@@ -185,6 +185,57 @@ impl Scene {
         self.objects.len() - 1
     }
 
+    /// Gives object `object` keyframes (for scenes built in code, as `[[object.keyframe]]`
+    /// does in a file): `keys` in increasing time, each translation and rotation replacing the
+    /// object's at that time, the object's current transform supplying the scale and the
+    /// values of channels no key gives. The object becomes moving, is placed where the keys
+    /// put it at time 0, and the scene's duration covers the last key. The links made for
+    /// such a scene are bounded for the whole motion, so [`crate::engine::Engine::set_time`]
+    /// updates follow it without relinking.
+    pub fn set_object_keyframes(&mut self, object: usize, keys: Vec<ObjectKey>) -> Result<()> {
+        let n = self.objects.len();
+        let o = self.objects.get(object).ok_or_else(|| {
+            Error::Invalid(format!("object {object} does not exist ({n} objects)"))
+        })?;
+        let bad = |what: String| Error::Invalid(format!("object {object} keyframes: {what}"));
+        if keys.is_empty() {
+            return Err(bad("no keys".into()));
+        }
+        let mut prev: Option<f64> = None;
+        for (i, k) in keys.iter().enumerate() {
+            if !(k.time.is_finite() && k.time >= 0.0) || prev.is_some_and(|p| k.time <= p) {
+                return Err(bad(format!(
+                    "key {i}: times must be finite, non-negative and increasing, got {}",
+                    k.time
+                )));
+            }
+            if k.translate.is_some_and(|v| !v.is_finite())
+                || k.rotate
+                    .is_some_and(|q| !q.is_finite() || !q.is_normalized())
+            {
+                return Err(bad(format!(
+                    "key {i}: translations must be finite and rotations unit quaternions"
+                )));
+            }
+            prev = Some(k.time);
+        }
+        let (scale, rotate, translate) = o.transform.to_scale_rotation_translation();
+        let last = prev.expect("keys is not empty");
+        let motion = ObjectMotion {
+            scale,
+            rotate,
+            translate,
+            keys,
+        };
+        let start = motion.transform_at(0.0);
+        let o = &mut self.objects[object];
+        o.motion = Some(motion);
+        o.moving = true;
+        self.duration = Some(self.duration.map_or(last, |d| d.max(last)));
+        self.place(object, start);
+        Ok(())
+    }
+
     /// Whether anything moves: a keyframed or `moving` object, or a keyframed light.
     pub fn is_animated(&self) -> bool {
         self.objects.iter().any(|o| o.moving)
