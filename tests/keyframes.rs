@@ -220,3 +220,51 @@ fn bundled_moving_scene_is_the_cornell_box() {
     assert_ne!(tris(&moving.at(1.0)), tris(&still));
     assert_eq!(moving.duration(), 2.0);
 }
+
+/// Keys given in code (`Scene::set_object_keyframes`, for hosts building scenes) move an object
+/// exactly as the same keys read from a file; bad keys are refused with the object named.
+#[test]
+fn keyframes_given_in_code_equal_the_file_format() {
+    let file = parse(BLOCK);
+    let mut code = parse(
+        r#"
+[[object]]
+mesh = "cornell-box-moving/room.obj"
+[[object]]
+mesh = "cornell-box-moving/short-box.obj"
+moving = true
+"#,
+    );
+    use antiradiance::scene::animation::ObjectKey;
+    let key = |time: f64, t: [f64; 3], deg: Option<f64>| ObjectKey {
+        time,
+        translate: Some(DVec3::from_array(t)),
+        rotate: deg.map(|d| DQuat::from_rotation_y(d.to_radians())),
+    };
+    let keys = vec![
+        key(1.0, [0.2, 0.0, 0.0], Some(90.0)),
+        key(3.0, [0.4, 0.2, 0.0], None),
+    ];
+    code.set_object_keyframes(1, keys.clone()).unwrap();
+    assert_eq!(code.duration, Some(3.0));
+    assert!(code.objects[1].moving);
+    for t in [0.0, 0.5, 2.0, 4.0] {
+        let (a, b) = (file.at(t), code.at(t));
+        assert!(
+            block(&a)
+                .iter()
+                .zip(block(&b))
+                .all(|(p, q)| (*p - *q).length() < 1e-12),
+            "t = {t}"
+        );
+    }
+    let mut bad = keys.clone();
+    bad[1].time = 1.0;
+    let e = code.set_object_keyframes(1, bad).unwrap_err().to_string();
+    assert!(e.contains("object 1") && e.contains("increasing"), "{e}");
+    let mut bad = keys;
+    bad[0].translate = Some(DVec3::new(f64::NAN, 0.0, 0.0));
+    assert!(code.set_object_keyframes(1, bad).is_err());
+    assert!(code.set_object_keyframes(1, Vec::new()).is_err());
+    assert!(code.set_object_keyframes(7, Vec::new()).is_err());
+}

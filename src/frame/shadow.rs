@@ -488,6 +488,26 @@ impl ShadowMaps {
 mod tests {
     use super::*;
 
+    /// A sphere is seen where it stands in front of a view, not behind it or far to its side;
+    /// one around the light always is. Orthographic views take the square widened by the radius.
+    #[test]
+    fn views_see_spheres_in_front() {
+        let v = ShadowView::perspective(DVec3::ZERO, DVec3::NEG_Y, 45f64.to_radians(), 0.1, 10.0);
+        assert!(v.may_see(DVec3::new(0.0, -2.0, 0.0), 0.1));
+        assert!(v.may_see(DVec3::ZERO, 0.01));
+        assert!(!v.may_see(DVec3::new(0.0, 2.0, 0.0), 0.5));
+        // 45° half-angle: a point 60° off the axis is outside the square's cone (54.7°)...
+        let off = DVec3::new(60f64.to_radians().sin(), -60f64.to_radians().cos(), 0.0) * 2.0;
+        assert!(!v.may_see(off, 0.05));
+        // ...unless its radius reaches in.
+        assert!(v.may_see(off, 0.4));
+        let mut o = v.clone();
+        o.ortho = true;
+        o.half = 1.0;
+        assert!(o.may_see(DVec3::new(1.2, -3.0, 0.0), 0.3));
+        assert!(!o.may_see(DVec3::new(1.5, -3.0, 0.0), 0.3));
+    }
+
     #[test]
     fn glsl_uses_the_same_constants() {
         let glsl = include_str!("../../glsl/frame.glsl");
