@@ -177,7 +177,7 @@ pub fn summary(records: &[FrameRecord]) -> String {
         let iteration = mean(|r| r.solve_ms / r.iterations.max(1) as f64);
         let update = mean(|r| r.update_ms);
         s += &format!(
-            "; animated frames {:.1} ms each ({:.2} fps): update {:.1} ms (follow or relink {:.1}, tables {:.1}, shadow maps and direct light {:.1}, carry-over {:.1}; {:.1} iterations' worth), solve {:.1} ms ({:.1} ms per iteration), draw {:.1} ms",
+            "; animated frames {:.1} ms each ({:.2} fps): update {:.1} ms (follow or relink {:.1}, backend {:.1}, shadow maps and direct light {:.1}, carry-over {:.1}; {:.1} iterations' worth), solve {:.1} ms ({:.1} ms per iteration), draw {:.1} ms",
             frame,
             1e3 / frame,
             update,

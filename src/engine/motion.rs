@@ -3,18 +3,20 @@
 //! [`Engine::update`] makes the engine follow, and the next iterations continue from the
 //! previous frame's solution (warm start).
 //!
-//! - **Only lights moved**: the elements and links are kept; the lights, plan and shadow maps
-//!   are made anew, the backend keeps its tables (the GPU makes only its frame anew) unless the
-//!   plan's passes or precision changed, and the solution carries over row for row.
+//! - **Only lights moved**: the elements and links are kept; the lights, plan and shadow-map
+//!   views are made anew, the backend keeps its tables and solution unless the plan's passes or
+//!   precision changed; the GPU frame draws again only the shadow views of the lights that
+//!   moved.
 //! - **Keyframed objects moved along their keyframes** (`set_time`): the **bounded link mesh**
 //!   ([`crate::bound`]). The scene was linked once, at preparation, for the worst case over the
 //!   whole motion (moving objects are their own subtrees); an update moves the elements and
 //!   moving nodes and recomputes the sides, bins, cone class and form factor of only the links
 //!   touching a moving node ([`crate::System::follow`]) — nothing is relinked, the nodes and
-//!   rows stay, the solution carries over row for row. The CPU backend keeps its tables and
+//!   rows stay, and both backends keep their tables and solution in place. The CPU backend
 //!   casts again only the shadow-map rays that pass near a moved object (before or after);
-//!   the GPU backend is made anew for the moved system (tables, link buffers and frame
-//!   uploaded again, every shadow map rendered, the old I_ex read back and uploaded). The
+//!   the GPU backend uploads the re-packed link records, the leaves' normals and lobe factors
+//!   (recorded into a host's command buffer by [`Engine::record_update`]), writes the frame's
+//!   buffers in place and draws again only the shadow views that may see a moved object. The
 //!   direct light is recomputed in both.
 //! - **Any other object motion** (a pose a host set with `set_object_transform`, which the
 //!   bound may not cover; objects marked `moving` without keyframes; a scene without a bound):
@@ -121,9 +123,9 @@ impl Engine {
     /// Makes the engine follow what moved since the last update (no-op when nothing did):
     /// along the bounded link mesh where keyframed objects moved, else re-preparing the moved
     /// scene (module doc); the shadow maps and direct light are recomputed and the previous
-    /// solution carries over as the start of the next iterations. GPU: the new tables are
-    /// uploaded here (the result image is a new one: hosts re-read
-    /// [`super::gpu::GpuBackend::frame`] after an update).
+    /// solution carries over as the start of the next iterations. GPU: where the backend is
+    /// made anew (relinked, or new passes) its tables are uploaded here and its result image is
+    /// a new one: hosts re-read [`super::gpu::GpuBackend::frame`] after an update.
     pub fn update(&mut self) -> Result<()> {
         if self.method != crate::settings::Method::Antiradiance {
             return Err(Error::Invalid(format!(
@@ -250,16 +252,18 @@ impl Engine {
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct UpdateTimes {
     /// Following the bounded link mesh (moving the elements, recomputing the moving links) or
-    /// discretizing and linking the moved scene, then planning and mapping the old solution
-    /// onto it (includes reading I_ex back from the GPU).
+    /// discretizing and linking the moved scene, and planning it.
     pub prepare_ms: f64,
-    /// Creating the backend's tables, link buffers and frame (GPU: allocations, uploads,
-    /// pipelines from the cache), or the CPU backend following in place (its ray caster).
+    /// The backend following in place (CPU: its ray caster; GPU: the link records, normals and
+    /// lobe factors packed and uploaded or recorded, the frame's buffers written), or, where it
+    /// cannot, reading the old solution back and creating the backend's tables, link buffers
+    /// and frame anew (allocations, uploads, pipelines from the cache).
     pub backend_ms: f64,
-    /// Shadow maps (CPU after a bounded move: only rays near the moved objects) and the leaves'
-    /// direct light.
+    /// Shadow maps (after a bounded move only rays (CPU) or views (GPU) that may see a moved
+    /// object; after a light move only its views on the GPU) and the leaves' direct light.
     pub lights_ms: f64,
-    /// Handing the carried-over solution to the backend (GPU: its upload).
+    /// Handing the carried-over solution to a backend made anew (GPU: its upload); nearly
+    /// nothing where the backend kept it.
     pub carry_ms: f64,
     /// The whole update.
     pub total_ms: f64,
