@@ -20,6 +20,26 @@ use crate::solver::Table;
 use ash::vk;
 use std::sync::Arc;
 
+/// The raster frame of `prep` on `ctx`, reading `solver`'s I_total.
+pub(crate) fn frame_for(
+    ctx: &Arc<Context>,
+    prep: &Prepared,
+    solver: &GpuSolver,
+) -> Result<GpuFrame> {
+    let mut frame = GpuFrame::new(
+        ctx.clone(),
+        &prep.scene,
+        &prep.lights,
+        &prep.camera,
+        &prep.system,
+        &prep.surfaces,
+        &prep.maps,
+        &prep.plan.features,
+    )?;
+    frame.bind_solver(solver);
+    Ok(frame)
+}
+
 /// The GPU solver and frame; keeps what a restart in float32 needs.
 pub struct GpuBackend {
     ctx: Arc<Context>,
@@ -52,17 +72,7 @@ impl GpuBackend {
     /// Creates the solver's and the frame's resources for `prep` on `ctx`.
     pub fn new(ctx: Arc<Context>, prep: &Prepared, tuning: GpuTuning) -> Result<Self> {
         let solver = Self::make_solver(&ctx, prep, prep.plan.precision, tuning)?;
-        let mut frame = GpuFrame::new(
-            ctx.clone(),
-            &prep.scene,
-            &prep.lights,
-            &prep.camera,
-            &prep.system,
-            &prep.surfaces,
-            &prep.maps,
-            &prep.plan.features,
-        )?;
-        frame.bind_solver(&solver);
+        let frame = frame_for(&ctx, prep, &solver)?;
         Ok(Self {
             ctx,
             solver,
@@ -230,17 +240,7 @@ impl Backend for GpuBackend {
             &moved,
         )?;
         if !kept {
-            self.frame = GpuFrame::new(
-                self.ctx.clone(),
-                &prep.scene,
-                &prep.lights,
-                &prep.camera,
-                &prep.system,
-                &prep.surfaces,
-                &prep.maps,
-                &prep.plan.features,
-            )?;
-            self.frame.bind_solver(&self.solver);
+            self.frame = frame_for(&self.ctx, prep, &self.solver)?;
         }
         self.kept_maps = (before.maps.views == prep.maps.views && !before.maps.data.is_empty())
             .then(|| before.maps.data.clone());

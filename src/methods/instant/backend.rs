@@ -166,17 +166,7 @@ impl GpuInstant {
             },
         )?;
         display.upload_i_total(&zeros(prep))?;
-        let mut frame = GpuFrame::new(
-            ctx.clone(),
-            &prep.scene,
-            &prep.lights,
-            &prep.camera,
-            &prep.system,
-            &prep.surfaces,
-            &prep.maps,
-            &prep.plan.features,
-        )?;
-        frame.bind_solver(&display);
+        let frame = crate::engine::gpu::frame_for(&ctx, prep, &display)?;
         Ok(Self {
             ctx,
             display,
