@@ -53,6 +53,50 @@ fn check_outputs<'a>(paths: impl IntoIterator<Item = Option<&'a PathBuf>>) -> Re
     Ok(())
 }
 
+/// What `-o PATH` asks for, by its extension: an 8-bit PNG (`.png`), or linear EXR radiance
+/// (`.exr`, as `--exr` writes); anything else is refused before any work.
+enum Picture {
+    Png(PathBuf),
+    Exr(PathBuf),
+}
+
+fn picture(path: PathBuf) -> Result<Picture> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("png") => Ok(Picture::Png(path)),
+        Some("exr") => Ok(Picture::Exr(path)),
+        _ => anyhow::bail!(
+            "{}: --output writes PNG (.png) or linear EXR (.exr); name the file with one of those extensions",
+            path.display()
+        ),
+    }
+}
+
+/// Writes `image` to `-o`'s picture: PNG at `exposure`, or EXR.
+fn write_picture(image: &antiradiance::frame::Image, p: &Picture, exposure: f64) -> Result<()> {
+    let path = match p {
+        Picture::Png(path) => {
+            image.write_png(path, exposure)?;
+            path
+        }
+        Picture::Exr(path) => {
+            image.write_exr(path)?;
+            path
+        }
+    };
+    wrote(path);
+    Ok(())
+}
+
+fn picture_path(p: &Option<Picture>) -> Option<&PathBuf> {
+    p.as_ref().map(|p| match p {
+        Picture::Png(path) | Picture::Exr(path) => path,
+    })
+}
+
 fn wrote(p: &Path) {
     eprintln!("wrote {}", p.display());
 }
@@ -187,11 +231,12 @@ fn run(cli: Cli) -> Result<()> {
             json,
         } => {
             let (direct, stderr) = antiradiance::reference::sibling_paths(&exr);
+            let output = output.map(picture).transpose()?;
             check_outputs([
                 Some(&exr),
                 Some(&direct),
                 Some(&stderr),
-                output.as_ref(),
+                picture_path(&output),
                 json.as_ref(),
             ])?;
             let mut s = load(scene)?;
@@ -214,9 +259,8 @@ fn run(cli: Cli) -> Result<()> {
             for p in r.write(&exr)? {
                 wrote(&p);
             }
-            if let Some(p) = output {
-                r.image.write_png(&p, exposure)?;
-                wrote(&p);
+            if let Some(p) = &output {
+                write_picture(&r.image, p, exposure)?;
             }
             write_json(&json, &r.stats)?;
         }
@@ -307,9 +351,13 @@ fn run(cli: Cli) -> Result<()> {
             device,
             plan,
         } => {
-            let png = (output.is_some() || exr.is_none())
-                .then(|| output.clone().unwrap_or_else(|| PathBuf::from("out.png")));
-            check_outputs([png.as_ref(), exr.as_ref(), json.as_ref()])?;
+            let picture = match output.clone() {
+                Some(p) => Some(picture(p)?),
+                None => exr
+                    .is_none()
+                    .then(|| Picture::Png(PathBuf::from("out.png"))),
+            };
+            check_outputs([picture_path(&picture), exr.as_ref(), json.as_ref()])?;
             let mut s = load(scene)?;
             if let Some(t) = time {
                 s.move_to(t);
@@ -336,9 +384,8 @@ fn run(cli: Cli) -> Result<()> {
                 r.image.write_exr(p)?;
                 wrote(p);
             }
-            if let Some(p) = png {
-                r.image.write_png(&p, exposure)?;
-                wrote(&p);
+            if let Some(p) = &picture {
+                write_picture(&r.image, p, exposure)?;
             }
             write_json(&json, &r.stats)?;
         }

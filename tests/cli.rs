@@ -155,6 +155,40 @@ fn a_bad_output_path_is_refused_before_rendering_and_leaves_nothing() {
     assert_eq!(names, ["out.png", "stats.json"]);
 }
 
+/// `-o` writes by the extension it is given: `.exr` linear EXR radiance (the same image as
+/// `--exr`), `.png` 8-bit sRGB; any other extension is refused before rendering.
+#[test]
+fn output_format_follows_the_extension() {
+    let d = scratch("formats");
+    let s = scene();
+    let run = |extra: &[&str]| {
+        let mut a = vec!["render", s.to_str().unwrap(), "--backend", "cpu"];
+        a.extend(["--width", "8", "--height", "8", "--iterations", "1"]);
+        a.extend(extra);
+        bin().args(a).output().unwrap()
+    };
+    let (o_exr, exr) = (d.join("o.EXR"), d.join("exr.exr"));
+    let o = run(&[
+        "-o",
+        o_exr.to_str().unwrap(),
+        "--exr",
+        exr.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let (a, b) = (
+        Image::read_exr(&o_exr).unwrap(),
+        Image::read_exr(&exr).unwrap(),
+    );
+    assert_eq!(a.pixels, b.pixels);
+    let jpg = d.join("o.jpg");
+    refused(
+        &["render", s.to_str().unwrap(), "-o", jpg.to_str().unwrap()],
+        1,
+        &["o.jpg", ".png", ".exr"],
+    );
+    assert!(!jpg.exists());
+}
+
 #[test]
 fn compare_refuses_a_non_finite_image_naming_it() {
     let d = scratch("compare");

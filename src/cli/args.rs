@@ -65,7 +65,8 @@ pub enum Command {
     Render {
         /// Scene TOML (default: the bundled Cornell box).
         scene: Option<PathBuf>,
-        /// PNG output (tone-mapped sRGB); written when given, or when no --exr is given.
+        /// PNG output (tone-mapped sRGB; a name ending in .exr writes linear EXR instead);
+        /// written when given, or when no --exr is given.
         #[arg(short, long)]
         output: Option<PathBuf>,
         /// EXR output (linear float RGB radiance).
@@ -168,7 +169,8 @@ pub enum Command {
         seed: u64,
         #[command(flatten)]
         size: SizeArgs,
-        /// Also write a PNG (exposure in stops via --exposure).
+        /// Also write a PNG (exposure in stops via --exposure; a name ending in .exr writes
+        /// linear EXR instead).
         #[arg(short, long)]
         output: Option<PathBuf>,
         /// PNG exposure in stops.
