@@ -300,6 +300,15 @@ fn run(cli: Cli) -> Result<()> {
             device,
             plan,
         } => {
+            if let Some(p) = &screenshot {
+                // The presented image is 8-bit sRGB: a PNG.
+                if !matches!(picture(p.clone())?, Picture::Png(_)) {
+                    anyhow::bail!(
+                        "{}: --screenshot writes the presented 8-bit image as PNG (.png)",
+                        p.display()
+                    );
+                }
+            }
             check_outputs([screenshot.as_ref()])?;
             let s = load(scene)?;
             let mut o = plan.options();
