@@ -12,8 +12,13 @@ use rayon::prelude::*;
 use std::f64::consts::PI;
 
 /// Default truncation: weights below this fraction of a row's largest weight are dropped (they
-/// cost fragments on the GPU); `solver.filter_cutoff` sets another.
-pub const CUTOFF: f64 = 1e-3;
+/// cost fragments on the GPU) and the row renormalized; `solver.filter_cutoff` sets another.
+/// Measured against no truncation (1e-9), relative RMSE of the image: Cornell box 1.2e-4 at
+/// 1e-3, 6.5e-4 at 1e-2, 2.1e-3 at 3e-2; MNRoom 3.6e-5 at 1e-3, 1.0e-3 at 3e-2. At 3e-2 the
+/// Cornell box's global pass draws 13.1M fragments and 3.06M lines instead of 23.7M and 3.84M
+/// (0.79 s instead of 1.15 s per iteration on lavapipe): a third of the global pass for 0.2% of
+/// the image, a fortieth of the discretization's error against a path tracer.
+pub const CUTOFF: f64 = 3e-2;
 
 /// Number of cone classes for a given bin count: class `c ≥ 1` covers sender solid angles in
 /// `(ω_bin·2^(c-1), ω_bin·2^c]`, the last one everything up to a hemisphere and beyond.

@@ -85,9 +85,11 @@ fn stiff_enclosures_iterate_to_the_tolerance_or_say_they_stopped() {
             worst * 100.0,
             partial * 100.0
         );
-        // Measured: 9.0e-5 (CPU, ρ = 0.99), 1.1e-8 (CPU, ρ = 0.999), 1.3e-6 (GPU, float32 tables:
-        // the bound allows another device's float32 arithmetic over 459 iterations).
-        let limit = if backend == Backend::Gpu { 1e-5 } else { 3e-4 };
+        // Measured: 9.0e-5 (CPU, ρ = 0.99), 1.1e-8 (CPU, ρ = 0.999), 2.0e-5 (GPU, float32 tables;
+        // 3.7e-6 with the filter truncated at 1e-3 instead of 3e-2: the float32 filter weights
+        // sum to one within rounding, and 460 iterations at ρ = 0.99 amplify it; the bound
+        // allows 3× for another device's float32 arithmetic).
+        let limit = if backend == Backend::Gpu { 6e-5 } else { 3e-4 };
         assert!(
             off_series < limit,
             "{off_series:.2e} of ρⁿ⁺¹ off the series"
