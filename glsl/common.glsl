@@ -88,7 +88,7 @@ const float AR_PI = 3.14159265358979;
 layout(push_constant) uniform FrameConstants {
     mat4 view_proj;   // camera, or the shadow view being drawn
     vec4 eye;         // xyz eye; w = 1 / source scale
-    vec4 environment; // rgb radiance where camera rays escape
+    vec4 environment; // rgb radiance where camera rays escape; w: exposure factor on the output
     uvec4 sizes;      // target width, height, bins, rows per column block
     uvec4 misc;       // light count, shadow view, shadow map side, supersampling
 } pc;

@@ -152,5 +152,6 @@ void main() {
         }
     }
     vec3 l = rest / n + (edge ? edge_emission(px, ss) : emission / n);
-    color = vec4(l, 1.0);
+    // A viewer's exposure (1 for `render`: the output is the radiance).
+    color = vec4(l * pc.environment.w, 1.0);
 }

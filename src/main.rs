@@ -297,6 +297,7 @@ fn run(cli: Cli) -> Result<()> {
             resize,
             step,
             shadow_map_size,
+            exposure,
             device,
             plan,
         } => {
@@ -325,6 +326,7 @@ fn run(cli: Cli) -> Result<()> {
                 screenshot,
                 resize,
                 step,
+                exposure,
             })
             .with_context(|| name)?;
         }

@@ -207,6 +207,37 @@ fn view_screenshot_is_the_rendered_scene() {
     // scaling, the blit did not). Bound 3×.
     assert!(rmse <= 2.4e-2, "relative RMSE {rmse:.2e}");
     assert!(worst <= 2, "largest difference {worst}");
+
+    // One stop brighter (`--exposure 1`, the `=` key's two steps): as `render --exposure 1`.
+    let (bright, bright_ref) = (dir.join("bright.png"), dir.join("bright-render.png"));
+    let o = Command::new("xvfb-run")
+        .args(["-a", bin, "view"])
+        .args(common)
+        .args(["--frames", "3", "--exposure", "1"])
+        .args(["--screenshot", bright.to_str().unwrap()])
+        .env("ANTIRADIANCE_VALIDATION", "1")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "view --exposure failed: {err}");
+    assert!(!err.contains("validation"), "validation messages: {err}");
+    let o = Command::new(bin)
+        .arg("render")
+        .args(common)
+        .args(["--exposure", "1", "-o", bright_ref.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    let ((_, _, got), (_, _, want)) = (png(&bright), png(&bright_ref));
+    let (rmse, worst) = rel_rmse(&got, &want);
+    let brighter =
+        got.iter().map(|&v| v as f64).sum::<f64>() / view.iter().map(|&v| v as f64).sum::<f64>();
+    println!(
+        "exposure +1: against render --exposure 1 relative RMSE {rmse:.2e}, largest difference {worst}/255; {brighter:.2}× the 8-bit sum at 0"
+    );
+    // The same bounds as at exposure 0 (the same solve and frame, scaled before the blit).
+    assert!(rmse <= 1.6e-2 && worst <= 2, "{rmse:.2e}, {worst}");
+    assert!(brighter > 1.2, "not brighter: {brighter}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -273,6 +273,9 @@ pub enum Command {
         /// Shadow map side in texels.
         #[arg(long, default_value_t = 1024)]
         shadow_map_size: u32,
+        /// Exposure in stops at the start (the keys `-` and `=` change it by half a stop).
+        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite)]
+        exposure: f64,
         /// Vulkan device whose name contains this (default: prefer a discrete GPU).
         #[arg(long)]
         device: Option<String>,
@@ -315,10 +318,11 @@ Keys:  W/S forward/back, A/D left/right, Q/E down/up (eye and target together, 2
        Space plays/pauses the animation (keyframed scenes start playing), Left/Right scrub by
        5% of its duration, Home goes to its start; Tab selects the next analytic light,
        J/L, I/K, U/O move it along -x/+x, -z/+z, -y/+y by 2% of the scene (a directional
-       light turns by 5°). After a change every frame runs the scene's iterations_per_frame
-       warm-started iterations until its iterations are done (always while playing).
+       light turns by 5°); - and = (keypad - and +) lower and raise the exposure by half a
+       stop. After a change every frame runs the scene's iterations_per_frame warm-started
+       iterations until its iterations are done (always while playing).
 The title shows the frame rate, the frame's GPU pass times (ms, summed over its iterations),
-the animation time, the selected light and the last update's time.";
+the exposure, the animation time, the selected light and the last update's time.";
 
 /// Solver settings that replace the scene's.
 #[derive(Args)]

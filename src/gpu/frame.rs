@@ -141,6 +141,8 @@ pub struct GpuFrame {
     staged: super::staged::Staged,
     /// The solver's I_total the set points at ([`GpuFrame::bind_solver`]).
     i_total: Option<vk::ImageView>,
+    /// Factor on the output radiance ([`GpuFrame::set_exposure`]; 1: radiance as computed).
+    exposure: f32,
     timings: Vec<(String, f64)>,
     setup: super::solver::SetupTimes,
     sampler: Owned<vk::Sampler>,
@@ -158,7 +160,7 @@ fn constants(scene: &Scene, lights: usize, camera: &Camera, sys: &System) -> Fra
     FrameConstants {
         view_proj: mat(view.view_proj(far * 1e-5, far)),
         eye: [view.eye.x as f32, view.eye.y as f32, view.eye.z as f32, 1.0],
-        environment: [env.x as f32, env.y as f32, env.z as f32, 0.0],
+        environment: [env.x as f32, env.y as f32, env.z as f32, 1.0],
         sizes: [
             camera.width * SUPERSAMPLE,
             camera.height * SUPERSAMPLE,
@@ -238,6 +240,7 @@ impl GpuFrame {
             views: maps.views.clone(),
             only: None,
             i_total: None,
+            exposure: 1.0,
             staged: super::staged::Staged::new(c),
             constants: constants(scene, lights.len(), camera, sys),
             profiler: Profiler::new(c, 16)?,
@@ -375,6 +378,7 @@ impl GpuFrame {
         let layout = solver.images().layout;
         let mut constants = self.constants;
         constants.eye[3] = (1.0 / solver.scale()) as f32;
+        constants.environment[3] = self.exposure;
         constants.sizes[3] = layout.rows_per_column;
         solver.prepare_display(cmd);
         let ctx = self.ctx.clone();
@@ -464,6 +468,12 @@ impl GpuFrame {
         }
         self.constants = constants(scene, lights, camera, sys);
         Ok(())
+    }
+
+    /// Multiplies the output by `factor` from the next frame on (a viewer's exposure; 1 by
+    /// default, the output then being the radiance `render` writes).
+    pub fn set_exposure(&mut self, factor: f32) {
+        self.exposure = factor;
     }
 
     /// Reads the frame's timestamps of a host-submitted command buffer (after it completed).

@@ -220,7 +220,8 @@ pub struct FrameConstants {
     pub view_proj: [[f32; 4]; 4],
     /// Eye position (xyz); 1 / source scale (w), to undo the solver's scale on I_total.
     pub eye: [f32; 4],
-    /// Environment radiance seen where camera rays escape (rgb).
+    /// Environment radiance seen where camera rays escape (rgb); the factor on the output (w:
+    /// a viewer's exposure, 1 otherwise).
     pub environment: [f32; 4],
     /// Target width, target height, bins `m`, rows per column block of I_total.
     pub sizes: [u32; 4],

@@ -44,6 +44,8 @@ pub struct ViewRequest {
     pub resize: Option<(u32, u32)>,
     /// Scene seconds per frame while playing with `frames` (the wall clock otherwise).
     pub step: f64,
+    /// Exposure in stops at the start (`-` and `=` change it by half a stop).
+    pub exposure: f64,
 }
 
 /// Opens the window and runs until it is closed (or `frames` were presented).
@@ -124,6 +126,8 @@ impl ApplicationHandler for App {
                 }
                 let c = &mut v.control;
                 match code {
+                    KeyCode::Minus | KeyCode::NumpadSubtract => v.exposure -= 0.5,
+                    KeyCode::Equal | KeyCode::NumpadAdd => v.exposure += 0.5,
                     KeyCode::Escape => el.exit(),
                     KeyCode::KeyW => c.step(Move::Forward),
                     KeyCode::KeyS => c.step(Move::Back),
@@ -201,6 +205,8 @@ struct Viewer {
     frame_s: f64,
     /// When the first frame was presented (the `--frames` summary's rate starts there).
     first: Option<Instant>,
+    /// Exposure in stops (the frame's output times 2^exposure before the sRGB blit).
+    exposure: f64,
     linear_blit: bool,
     host: Host,
     window: Window,
@@ -270,6 +276,7 @@ impl Viewer {
             last: None,
             frame_s: 0.0,
             first: None,
+            exposure: req.exposure,
             linear_blit: false,
             host,
             window,
@@ -377,7 +384,10 @@ impl Viewer {
                         .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
                 )?;
             }
+            let exposure = 2f32.powf(self.exposure as f32);
             let engine = self.engine()?;
+            // Set every frame: an update that makes the frame anew starts it at 1.
+            engine.gpu()?.frame().set_exposure(exposure);
             engine.gpu()?.begin(cmd);
             // Warm-started iterations after a change (`iterations_per_frame`), then the frame.
             engine.record_iterations(cmd, iterations)?;
@@ -489,6 +499,7 @@ impl Viewer {
             };
         }
         let mode = self.control.mode;
+        let exposure = self.exposure;
         let engine = self.engine.as_mut().ok_or_else(|| anyhow!("no engine"))?;
         let status = self.playback.status(engine);
         let gpu = engine.gpu()?;
@@ -514,7 +525,7 @@ impl Viewer {
         let passes = passes.join(", ");
         let sep = if status.is_empty() { "" } else { " · " };
         self.window.set_title(&format!(
-            "antiradiance · {rate} · GPU ms: {passes} · {mode:?}{sep}{status}"
+            "antiradiance · {rate} · GPU ms: {passes} · {mode:?} · exposure {exposure:+.1}{sep}{status}"
         ));
         Ok(passes)
     }
