@@ -137,6 +137,8 @@ pub struct GpuFrame {
     /// After a follow: the views the next shadow render draws (the others' maps are kept);
     /// `None`: every view.
     only: Option<Vec<bool>>,
+    /// Whether the atlas holds every view's map (a partial render keeps the others).
+    rendered: bool,
     /// Staging buffers of the last follow's uploads.
     staged: super::staged::Staged,
     /// The solver's I_total the set points at ([`GpuFrame::bind_solver`]).
@@ -239,6 +241,7 @@ impl GpuFrame {
                 .collect(),
             views: maps.views.clone(),
             only: None,
+            rendered: false,
             i_total: None,
             exposure: 1.0,
             staged: super::staged::Staged::new(c),
@@ -347,10 +350,11 @@ impl GpuFrame {
             self.buffers.corners.raw,
             self.corner_count,
             &self.shadow_rects,
-            self.only.as_deref(),
+            self.only.as_deref().filter(|_| self.rendered),
             self.constants,
         );
         self.only = None;
+        self.rendered = true;
         self.profiler.end(&ctx, cmd);
     }
 

@@ -92,8 +92,8 @@ impl GpuFrame {
     /// Views the next shadow render draws.
     pub fn shadow_views_to_render(&self) -> usize {
         match &self.only {
-            Some(o) => o.iter().filter(|&&b| b).count(),
-            None => self.shadow_rects.len(),
+            Some(o) if self.rendered => o.iter().filter(|&&b| b).count(),
+            _ => self.shadow_rects.len(),
         }
     }
 }
