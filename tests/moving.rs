@@ -300,6 +300,45 @@ fn gpu_rescales_the_held_solution_when_a_light_brightens() {
     common::assert_clean(o.context.as_ref().unwrap());
 }
 
+/// A point light turned into a narrow spot by `set_light`: its 6 shadow views become 1, the
+/// views' squares in the atlas move, and the GPU frame is made anew rather than reading squares
+/// never drawn; the frame matches a fresh render with the spot there.
+#[test]
+fn gpu_light_changing_its_views_matches_a_fresh_render() {
+    let mut scene = bundled("cornell-box.toml");
+    scene.lights.push(Light::Point {
+        position: DVec3::new(0.0, 1.5, 0.5),
+        intensity: DVec3::splat(0.5),
+    });
+    let o = options(BackendKind::Gpu);
+    let mut engine = Engine::new(&scene, &o, &Silent).unwrap();
+    engine.render(&Silent).unwrap();
+    let views = engine.prepared().maps.views.len();
+    let spot = Light::Spot {
+        position: DVec3::new(0.0, 1.5, 0.5),
+        axis: DVec3::NEG_Y,
+        intensity: DVec3::splat(0.5),
+        cutoff: 0.6,
+        beam_width: 0.4,
+    };
+    engine.set_light(0, spot.clone()).unwrap();
+    engine.update().unwrap();
+    assert_eq!(engine.prepared().maps.views.len(), views - 5);
+    let f = engine.gpu().unwrap().last_follow();
+    println!("point light to spot: {views} -> {} views, {f:?}", views - 5);
+    engine.iterate(4).unwrap();
+    let frame = engine.draw().unwrap();
+    scene.lights[0] = spot;
+    let scratch = Engine::new(&scene, &o, &Silent)
+        .unwrap()
+        .render(&Silent)
+        .unwrap();
+    let e = rmse_over_mean(&frame, &scratch.image);
+    println!("point light to spot: RMSE/mean {e:.4} against a fresh render");
+    assert!(e < 0.05, "{e}");
+    common::assert_clean(o.context.as_ref().unwrap());
+}
+
 /// A static scene: setting a time and updating changes nothing — not relinked, the same links,
 /// the same solution carried over exactly, the same frame.
 #[test]

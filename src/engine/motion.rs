@@ -217,7 +217,10 @@ impl Engine {
     /// moved frame geometry and the shadow maps (the leaves' direct light is computed from
     /// them on the host) and the direct-light table. Where the backend is made anew (a pose
     /// outside the bound, new passes), everything is uploaded here. The previous command
-    /// buffer into which an update was recorded must have completed.
+    /// buffer that holds engine work must have completed (the library writes its buffers and
+    /// descriptor sets here), and `cmd` must not hold engine commands before this one (record
+    /// the update first). A new source scale (a light made much brighter) reads the solution
+    /// back and uploads it rescaled, here too.
     pub fn record_update(&mut self, cmd: vk::CommandBuffer) -> Result<()> {
         if let Some(g) = self.backend.as_gpu() {
             g.record_follow_into(Some(cmd));

@@ -98,6 +98,24 @@ pub fn transition(ctx: &Context, cmd: vk::CommandBuffer, images: &mut [(&mut Ima
     unsafe { ctx.device.cmd_pipeline_barrier2(cmd, &dep) };
 }
 
+/// Orders copies into buffers after the vertex input and shader reads recorded before them
+/// (an update recorded into a command buffer after a frame's draws).
+pub fn before_uploads(ctx: &Context, cmd: vk::CommandBuffer) {
+    let mb = [vk::MemoryBarrier2::default()
+        .src_stage_mask(
+            vk::PipelineStageFlags2::VERTEX_INPUT
+                | vk::PipelineStageFlags2::VERTEX_SHADER
+                | vk::PipelineStageFlags2::FRAGMENT_SHADER,
+        )
+        .src_access_mask(
+            vk::AccessFlags2::VERTEX_ATTRIBUTE_READ | vk::AccessFlags2::SHADER_STORAGE_READ,
+        )
+        .dst_stage_mask(vk::PipelineStageFlags2::COPY)
+        .dst_access_mask(vk::AccessFlags2::TRANSFER_WRITE)];
+    let dep = vk::DependencyInfo::default().memory_barriers(&mb);
+    unsafe { ctx.device.cmd_pipeline_barrier2(cmd, &dep) };
+}
+
 /// Makes buffer uploads (copies) visible to vertex input and shader reads.
 pub fn after_uploads(ctx: &Context, cmd: vk::CommandBuffer) {
     let mb = [vk::MemoryBarrier2::default()

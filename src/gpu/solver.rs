@@ -88,14 +88,21 @@ pub struct GpuSolver {
     depth_parity: Vec<bool>,
     /// Whether each row is a leaf's (its I_ex is in the ping-pong pair).
     leaf_rows: Vec<bool>,
-    /// Whether the images hold a solution (initialized, uploaded or iterated): a new source
-    /// scale then rescales it.
-    live: bool,
+    /// Whether the images hold a solution's I_ex and its I_total (initialized, uploaded or
+    /// iterated): a new source scale then rescales them.
+    held: Held,
     /// Staging buffers of the last recorded follow.
     staged: super::staged::Staged,
     reducer: Reducer,
     work: super::work::Work,
     setup: SetupTimes,
+}
+
+/// Which tables hold values a new source scale must rescale.
+#[derive(Debug, Clone, Copy, Default)]
+struct Held {
+    i_ex: bool,
+    i_total: bool,
 }
 
 /// Wall time of a GPU object's creation, split as `profile` reports it.
@@ -209,7 +216,7 @@ impl GpuSolver {
                 .map(|n| n.depth % 2 == 1)
                 .collect(),
             leaf_rows: sys.leaf_slot.iter().map(|&s| s != u32::MAX).collect(),
-            live: false,
+            held: Held::default(),
             staged,
             reducer,
             work,
@@ -308,7 +315,11 @@ impl GpuSolver {
     /// environment's antiradiance, then pull (as [`crate::solver::CpuSolver::initialize`]).
     pub fn record_initialize(&mut self, cmd: vk::CommandBuffer) -> Result<()> {
         self.prepare(&[mode::BOTH])?;
-        self.live = true;
+        // The initial state writes I_ex and I_total (the local pass).
+        self.held = Held {
+            i_ex: true,
+            i_total: true,
+        };
         self.record(cmd, None, mode::BOTH);
         Ok(())
     }

@@ -3,7 +3,7 @@
 //! buffer does. An update after objects moved (§3.3) writes its changed link records and
 //! attributes this way, so a host records it with the frame's iterations.
 
-use super::barrier::{after_uploads, transition, Access};
+use super::barrier::{after_uploads, before_uploads, transition, Access};
 use super::context::Context;
 use super::memory::{copy_region, Buffer, Image};
 use crate::error::Result;
@@ -39,8 +39,15 @@ impl Staged {
         self.bytes
     }
 
+    /// Orders the copies recorded next after the vertex input and shader reads recorded before
+    /// them in `cmd`; call before the first [`Staged::buffer`].
+    pub fn start(&self, cmd: vk::CommandBuffer) {
+        before_uploads(&self.ctx, cmd);
+    }
+
     /// Records a copy of `bytes` over the start of `dst` (made with transfer-destination use,
-    /// as every uploaded buffer is). Call [`Staged::finish`] after the last buffer copy.
+    /// as every uploaded buffer is). Call [`Staged::start`] before the first buffer copy and
+    /// [`Staged::finish`] after the last.
     pub fn buffer(&mut self, cmd: vk::CommandBuffer, dst: &Buffer, bytes: &[u8]) -> Result<()> {
         if bytes.is_empty() {
             return Ok(());

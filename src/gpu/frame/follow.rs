@@ -20,8 +20,9 @@ impl GpuFrame {
     /// Takes the moved scene (its system, surfaces, `lights` and shadow `maps` views), keeping
     /// the images, pipelines and the shadow maps of views that cannot have changed: views equal
     /// to the last ones that meet none of the `moved` spheres (around each moved object before
-    /// and after its move). Returns false, changing nothing, where the images would differ (a
-    /// new camera size, features or atlas): the frame must be made anew.
+    /// and after its move). Returns false, changing nothing, where the images or the views'
+    /// squares in the atlas would differ (a new camera size, features, atlas or view count):
+    /// the frame must be made anew.
     #[allow(clippy::too_many_arguments)]
     pub fn follow(
         &mut self,
@@ -39,7 +40,12 @@ impl GpuFrame {
                 .iter()
                 .zip(self.images.iter())
                 .all(|(d, im)| *d == im.desc);
-        if !same_images {
+        let rects: Vec<[u32; 3]> = maps
+            .views
+            .iter()
+            .map(|v| [v.atlas.0, v.atlas.1, v.size])
+            .collect();
+        if !same_images || rects != self.shadow_rects {
             return Ok(false);
         }
         let data = FrameData::new(scene, lights, sys, surf, maps, features);
@@ -50,6 +56,7 @@ impl GpuFrame {
         let (buffers, staged) = (&mut self.buffers, &mut self.staged);
         ctx.submit_and_wait(|cmd| {
             result = (|| {
+                staged.start(cmd);
                 for (buf, &(name, bytes, usage)) in buffers.iter_mut().zip(data.contents().iter()) {
                     if bytes.len() as u64 > buf.size {
                         grown = true;
@@ -72,12 +79,16 @@ impl GpuFrame {
         self.corner_count = data.corners.len() as u32;
         self.splat_count = pack::splat_instances(surf, features.splat).len() as u32;
         self.constants = constants(scene, lights.len(), camera, sys);
+        // Views marked by an earlier follow and not drawn since stay marked.
+        let pending = self.only.take();
         let only: Vec<bool> = maps
             .views
             .iter()
             .enumerate()
             .map(|(i, v)| {
-                self.views.get(i) != Some(v) || moved.iter().any(|&(c, r)| v.may_see(c, r))
+                self.views.get(i) != Some(v)
+                    || moved.iter().any(|&(c, r)| v.may_see(c, r))
+                    || pending.as_ref().is_some_and(|p| p[i])
             })
             .collect();
         self.views = maps.views.clone();

@@ -55,9 +55,12 @@ impl GpuSolver {
     /// Takes `sys`, this solver's system after its objects moved along its bound, keeping the
     /// tables and the current solution: records the uploads of the new link records, the
     /// leaves' normals and lobe factors into `cmd` (their staging buffers live until the next
-    /// follow: `cmd` must have completed by then). Returns `None`, recording nothing, where
-    /// `sys` does not have this solver's rows, hierarchy and cone classes (the solver must be
-    /// made anew). The source scale may change with the system: see [`GpuSolver::set_direct`].
+    /// follow: `cmd` must have completed by then, as must every command buffer that used this
+    /// solver, and the uploads must come before any other of its commands in `cmd`). Returns
+    /// `None`, recording nothing, where `sys` does not have this solver's rows, hierarchy and
+    /// cone classes (the solver must be made anew). The source scale is chosen again for the
+    /// moved system by the next [`GpuSolver::set_direct`] or [`GpuSolver::set_environment`]
+    /// (the engine makes both right after).
     pub fn record_follow(
         &mut self,
         cmd: vk::CommandBuffer,
@@ -84,10 +87,11 @@ impl GpuSolver {
         Ok(out)
     }
 
-    /// The source range of the moved system, and the scale it asks for.
+    /// The source range of the moved system (its scale is chosen with the new direct light,
+    /// so that a held solution is rescaled at most once per update).
     fn rescale_for(&mut self, sys: &System) -> Result<()> {
         self.sys_range = Range::of(sys, DVec3::ZERO, 0.0);
-        self.update_scale()
+        Ok(())
     }
 
     /// The uploads of [`GpuSolver::record_follow`], recorded (nothing submitted).
@@ -118,6 +122,7 @@ impl GpuSolver {
         let staged = &mut self.staged;
         let (b, d) = (&mut res.buffers, &mut res.plan.buffers);
         let mut grown = 0;
+        staged.start(cmd);
         rewrite(
             staged,
             cmd,

@@ -55,6 +55,7 @@ impl GpuSolver {
         let mut scaled = table.clone();
         scaled.data.iter_mut().for_each(|v| *v *= self.scale);
         let bytes = encode(self.res.plan.format, &l.from_table(&scaled));
+        self.held.i_total = true;
         self.res.images.i_total.upload(&bytes)
     }
 
@@ -68,7 +69,7 @@ impl GpuSolver {
 
     /// [`GpuSolver::upload_i_ex`] for this solver's rows.
     fn put_i_ex(&mut self, table: &Table) -> Result<()> {
-        self.live = true;
+        self.held.i_ex = true;
         let l = *self.res.layout();
         let zero = || Table::zeros(table.rows(), table.bins);
         let (mut leaf, mut even, mut odd) = (zero(), zero(), zero());
@@ -149,16 +150,16 @@ impl GpuSolver {
         let e = self.environment * s;
         self.constants.environment = [e.x as f32, e.y as f32, e.z as f32, s as f32];
         if s != self.scale {
-            let held = if self.live {
-                Some((self.read_i_ex()?, self.read_i_total()?))
-            } else {
-                None
-            };
+            let held = self.held;
+            let i_ex = held.i_ex.then(|| self.read_i_ex()).transpose()?;
+            let i_total = held.i_total.then(|| self.read_i_total()).transpose()?;
             self.scale = s;
             self.upload_direct()?;
-            if let Some((i_ex, i_total)) = held {
-                self.put_i_ex(&i_ex)?;
-                self.upload_i_total(&i_total)?;
+            if let Some(t) = i_ex {
+                self.put_i_ex(&t)?;
+            }
+            if let Some(t) = i_total {
+                self.upload_i_total(&t)?;
             }
         }
         Ok(())
