@@ -8,7 +8,7 @@ use super::GpuTuning;
 use crate::error::Result;
 use crate::frame::lights::direct_in_table;
 use crate::frame::Image;
-use crate::gpu::frame::GpuFrame;
+use crate::gpu::frame::{FrameScene, GpuFrame};
 use crate::gpu::memory::MemoryReport;
 use crate::gpu::solver::SetupTimes;
 use crate::gpu::work::Work;
@@ -20,22 +20,26 @@ use crate::solver::Table;
 use ash::vk;
 use std::sync::Arc;
 
+/// What the frame of `prep` is drawn from.
+pub(crate) fn frame_scene(prep: &Prepared) -> FrameScene<'_> {
+    FrameScene {
+        scene: &prep.scene,
+        lights: &prep.lights,
+        camera: &prep.camera,
+        sys: &prep.system,
+        surf: &prep.surfaces,
+        maps: &prep.maps,
+        features: &prep.plan.features,
+    }
+}
+
 /// The raster frame of `prep` on `ctx`, reading `solver`'s I_total.
 pub(crate) fn frame_for(
     ctx: &Arc<Context>,
     prep: &Prepared,
     solver: &GpuSolver,
 ) -> Result<GpuFrame> {
-    let mut frame = GpuFrame::new(
-        ctx.clone(),
-        &prep.scene,
-        &prep.lights,
-        &prep.camera,
-        &prep.system,
-        &prep.surfaces,
-        &prep.maps,
-        &prep.plan.features,
-    )?;
+    let mut frame = GpuFrame::new(ctx.clone(), &frame_scene(prep))?;
     frame.bind_solver(solver);
     Ok(frame)
 }
@@ -229,16 +233,7 @@ impl Backend for GpuBackend {
             moved = crate::bound::moving_spheres(&before.system);
             moved.extend(crate::bound::moving_spheres(&prep.system));
         }
-        let kept = self.frame.follow(
-            &prep.scene,
-            &prep.lights,
-            &prep.camera,
-            &prep.system,
-            &prep.surfaces,
-            &prep.maps,
-            &prep.plan.features,
-            &moved,
-        )?;
+        let kept = self.frame.follow(&frame_scene(prep), &moved)?;
         if !kept {
             self.frame = frame_for(&self.ctx, prep, &self.solver)?;
         }

@@ -58,14 +58,16 @@ struct FrameData {
 }
 
 impl FrameData {
-    fn new(
-        scene: &Scene,
-        lights: &[Light],
-        sys: &System,
-        surf: &Surfaces,
-        maps: &ShadowMaps,
-        f: &Features,
-    ) -> Self {
+    fn new(f: &FrameScene<'_>) -> Self {
+        let FrameScene {
+            scene,
+            lights,
+            sys,
+            surf,
+            maps,
+            features: f,
+            ..
+        } = *f;
         // Shared-vertex adjacency only where smooth meshes are interpolated.
         let (adj_offsets, adj_list) = if f.vertex {
             (surf.adjacency_offsets.clone(), pack::adjacency(surf))
@@ -116,6 +118,27 @@ impl FrameData {
             .upload(ctx, bytes)
         })
     }
+}
+
+/// What a frame is drawn from: the scene, its lights (the scene's and its emitter samples) and
+/// their shadow views, the camera, the discretized system and its surfaces, and the plan's
+/// features.
+#[derive(Clone, Copy)]
+pub struct FrameScene<'a> {
+    /// The scene (geometry, materials, environment).
+    pub scene: &'a Scene,
+    /// The lights the frame shades with.
+    pub lights: &'a [Light],
+    /// The camera (its size is the frame's).
+    pub camera: &'a Camera,
+    /// The discretized scene.
+    pub sys: &'a System,
+    /// Which surfaces are splatted or interpolated, and their shared vertices.
+    pub surf: &'a Surfaces,
+    /// The lights' shadow views.
+    pub maps: &'a ShadowMaps,
+    /// What the plan computes.
+    pub features: &'a Features,
 }
 
 /// Draws frames of a solved scene from its camera.
@@ -189,22 +212,21 @@ impl GpuFrame {
         MemoryReport::default().images(Self::describe(camera, features, maps).iter())
     }
 
-    /// Uploads the geometry, `lights` (the scene's and its emitter samples) and their shadow
-    /// views and creates the frame's images and pipelines for `camera`.
-    #[allow(clippy::too_many_arguments)]
-    pub fn new(
-        ctx: Arc<Context>,
-        scene: &Scene,
-        lights: &[Light],
-        camera: &Camera,
-        sys: &System,
-        surf: &Surfaces,
-        maps: &ShadowMaps,
-        features: &Features,
-    ) -> Result<Self> {
+    /// Uploads the geometry, the lights and their shadow views of `f` and creates the frame's
+    /// images and pipelines for its camera.
+    pub fn new(ctx: Arc<Context>, f: &FrameScene<'_>) -> Result<Self> {
+        let FrameScene {
+            scene,
+            lights,
+            camera,
+            sys,
+            surf,
+            maps,
+            features,
+        } = *f;
         let c = &ctx;
         let t = std::time::Instant::now();
-        let data = FrameData::new(scene, lights, sys, surf, maps, features);
+        let data = FrameData::new(f);
         let buffers = data.upload(c)?;
         let images = Self::describe(camera, features, maps).try_map(|d| d.create(c))?;
         let uploads_ms = t.elapsed().as_secs_f64() * 1e3;

@@ -3,40 +3,25 @@
 //! can have changed marked for the next shadow render: a light's view that moved, or one that
 //! may see a moved object before or after its move.
 
-use super::{constants, FrameData, GpuFrame};
+use super::{constants, FrameData, FrameScene, GpuFrame};
 use crate::error::Result;
-use crate::frame::shadow::ShadowMaps;
-use crate::frame::surfaces::Surfaces;
 use crate::gpu::memory::Buffer;
 use crate::gpu::pack;
-use crate::plan::Features;
-use crate::scene::{Camera, Light, Scene};
-use crate::system::System;
 use ash::vk;
 use glam::DVec3;
 use gpu_allocator::MemoryLocation;
 
 impl GpuFrame {
-    /// Takes the moved scene (its system, surfaces, `lights` and shadow `maps` views), keeping
+    /// Takes the moved scene `f` (its system, surfaces, lights and shadow views), keeping
     /// the images, pipelines and the shadow maps of views that cannot have changed: views equal
     /// to the last ones that meet none of the `moved` spheres (around each moved object before
     /// and after its move). Returns false, changing nothing, where the images or the views'
     /// squares in the atlas would differ (a new camera size, features, atlas or view count):
     /// the frame must be made anew.
-    #[allow(clippy::too_many_arguments)]
-    pub fn follow(
-        &mut self,
-        scene: &Scene,
-        lights: &[Light],
-        camera: &Camera,
-        sys: &System,
-        surf: &Surfaces,
-        maps: &ShadowMaps,
-        features: &Features,
-        moved: &[(DVec3, f64)],
-    ) -> Result<bool> {
+    pub fn follow(&mut self, f: &FrameScene<'_>, moved: &[(DVec3, f64)]) -> Result<bool> {
+        let (maps, features) = (f.maps, f.features);
         let same_images = *features == self.features
-            && Self::describe(camera, features, maps)
+            && Self::describe(f.camera, features, maps)
                 .iter()
                 .zip(self.images.iter())
                 .all(|(d, im)| *d == im.desc);
@@ -48,7 +33,7 @@ impl GpuFrame {
         if !same_images || rects != self.shadow_rects {
             return Ok(false);
         }
-        let data = FrameData::new(scene, lights, sys, surf, maps, features);
+        let data = FrameData::new(f);
         let ctx = self.ctx.clone();
         self.staged.release();
         let mut grown = false;
@@ -77,8 +62,8 @@ impl GpuFrame {
         result?;
         self.staged.release();
         self.corner_count = data.corners.len() as u32;
-        self.splat_count = pack::splat_instances(surf, features.splat).len() as u32;
-        self.constants = constants(scene, lights.len(), camera, sys);
+        self.splat_count = pack::splat_instances(f.surf, features.splat).len() as u32;
+        self.constants = constants(f.scene, f.lights.len(), f.camera, f.sys);
         // Views marked by an earlier follow and not drawn since stay marked.
         let pending = self.only.take();
         let only: Vec<bool> = maps

@@ -13,7 +13,7 @@ use crate::engine::{Backend, Prepared};
 use crate::error::Result;
 use crate::frame::lights::direct_in_table;
 use crate::frame::Image;
-use crate::gpu::frame::GpuFrame;
+use crate::gpu::frame::{FrameScene, GpuFrame};
 use crate::gpu::memory::{MemoryReport, Purpose};
 use crate::gpu::{Context, GpuOptions, GpuSolver};
 use crate::methods::{MethodReport, MethodSettings, Shot};
@@ -91,13 +91,10 @@ impl GpuShooting {
         )?;
         let mut frame = GpuFrame::new(
             ctx.clone(),
-            &prep.scene,
-            &prep.lights,
-            &prep.camera,
-            sys,
-            &prep.surfaces,
-            &prep.maps,
-            &prep.plan.features,
+            &FrameScene {
+                sys,
+                ..crate::engine::gpu::frame_scene(prep)
+            },
         )?;
         frame.bind_solver(&display);
         let direct = vec![DVec3::ZERO; els.len()];
