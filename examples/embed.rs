@@ -419,10 +419,17 @@ fn frames_loop(
             //     the light from the host's own data, and update: the next iterations continue
             //     from the previous frame's solution. The update follows the block in place:
             //     the moved link records and normals are uploaded by commands recorded into
-            //     `cmd`; the shadow maps and direct light are done before it returns (a pose
-            //     set with `set_object_transform` outside the keys would prepare the scene
-            //     anew, and its GPU objects may be new: begin after the update).
-            engine.set_time(0.25 * frame as f64)?;
+            //     `cmd`; the shadow maps and direct light are done before it returns. Every
+            //     third frame the host places the block off its keys instead
+            //     (`set_object_transform`): the scene is prepared anew for that pose and the
+            //     GPU objects are new, so begin (and read the frame's images) after the update.
+            if frame % 3 == 2 {
+                let off = DMat4::from_translation(DVec3::new(-0.1, 0.0, 0.05))
+                    * DMat4::from_quat(DQuat::from_rotation_y(-0.3));
+                engine.set_object_transform(BLOCK, off)?;
+            } else {
+                engine.set_time(0.25 * frame as f64)?;
+            }
             engine.set_light(
                 0,
                 Light::Point {
@@ -489,14 +496,18 @@ fn frames_loop(
             "none".to_string()
         } else {
             let f = gpu.last_follow();
-            format!(
-                "{:.0} ms, {}, {} bytes recorded, {}/{} shadow views drawn",
-                engine.update_times().total_ms,
-                if f.in_place { "in place" } else { "made anew" },
-                f.uploaded_bytes,
-                f.shadow_views.0,
-                f.shadow_views.1
-            )
+            let ms = engine.update_times().total_ms;
+            if engine.relinked() {
+                format!("{ms:.0} ms, relinked and made anew")
+            } else {
+                format!(
+                    "{ms:.0} ms, {}, {} bytes recorded, {}/{} shadow views drawn",
+                    if f.in_place { "in place" } else { "made anew" },
+                    f.uploaded_bytes,
+                    f.shadow_views.0,
+                    f.shadow_views.1
+                )
+            }
         };
         println!(
             "frame {frame}: mean radiance {mean:.4}, {:.0} ms (update: {update}); GPU ms: {}",
