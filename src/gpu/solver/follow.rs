@@ -66,11 +66,7 @@ impl GpuSolver {
         cmd: vk::CommandBuffer,
         sys: &System,
     ) -> Result<Option<FollowUploads>> {
-        let out = self.record_uploads(cmd, sys)?;
-        if out.is_some() {
-            self.rescale_for(sys)?;
-        }
-        Ok(out)
+        self.record_uploads(cmd, sys)
     }
 
     /// [`GpuSolver::record_follow`] submitted on the solver's queue, waiting for it.
@@ -78,20 +74,8 @@ impl GpuSolver {
         let ctx = self.ctx.clone();
         let mut out = Ok(None);
         ctx.submit_and_wait(|cmd| out = self.record_uploads(cmd, sys))?;
-        let out = out?;
         self.staged.release();
-        if out.is_some() {
-            // After the submission: a new scale may read the solution back and upload it.
-            self.rescale_for(sys)?;
-        }
-        Ok(out)
-    }
-
-    /// The source range of the moved system (its scale is chosen with the new direct light,
-    /// so that a held solution is rescaled at most once per update).
-    fn rescale_for(&mut self, sys: &System) -> Result<()> {
-        self.sys_range = Range::of(sys, DVec3::ZERO, 0.0);
-        Ok(())
+        out
     }
 
     /// The uploads of [`GpuSolver::record_follow`], recorded (nothing submitted).
@@ -123,14 +107,14 @@ impl GpuSolver {
         let (b, d) = (&mut res.buffers, &mut res.plan.buffers);
         let mut grown = 0;
         staged.start(cmd);
-        rewrite(
+        grown += rewrite(
             staged,
             cmd,
             &ctx,
             &mut b.links,
             &mut d.links,
             as_bytes(&draw.links),
-        )?;
+        )? as usize;
         let combos = pack::padded(draw.combos.clone());
         let runs = pack::padded(draw.runs.clone());
         for (buf, desc, bytes) in [
@@ -155,6 +139,9 @@ impl GpuSolver {
             res.rewrite_sets(&ctx);
         }
         self.work = crate::gpu::work::Work::of(sys, &self.res.plan);
+        // The moved system's source range; its scale is chosen with the new direct light, so
+        // that a held solution is rescaled at most once per update.
+        self.sys_range = Range::of(sys, DVec3::ZERO, 0.0);
         Ok(Some(FollowUploads {
             bytes: self.staged.bytes(),
             grown,
