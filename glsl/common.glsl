@@ -13,18 +13,18 @@
 #define AR_BINDING_L_IN 3
 #define AR_BINDING_L_PUSH 4
 #define AR_BINDING_IRRADIANCE_T 5
-#define AR_BINDING_IRRADIANCE_D 6
-#define AR_BINDING_ATTR_NORMAL_AREA 7
-#define AR_BINDING_ATTR_LEAF 8
-#define AR_BINDING_DIRECT 9
-#define AR_BINDING_LEAF_EX_NEXT 10
-#define AR_BINDING_MATERIALS 11
-#define AR_BINDING_BIN_CENTERS 12
-#define AR_BINDING_LOBE_NORM 13
-#define AR_BINDING_CLUSTER_EX_ODD 14
-#define AR_BINDING_COMBOS 15
-#define AR_BINDING_RUNS 16
-#define AR_BINDING_LOBE_BINS 17
+#define AR_BINDING_ATTR_NORMAL_AREA 6
+#define AR_BINDING_ATTR_LEAF 7
+#define AR_BINDING_DIRECT 8
+#define AR_BINDING_LEAF_EX_NEXT 9
+#define AR_BINDING_MATERIALS 10
+#define AR_BINDING_BIN_CENTERS 11
+#define AR_BINDING_LOBE_NORM 12
+#define AR_BINDING_CLUSTER_EX_ODD 13
+#define AR_BINDING_COMBOS 14
+#define AR_BINDING_RUNS 15
+#define AR_BINDING_LOBE_BINS 16
+#define AR_BINDING_LINKS 17
 
 // The glossy lobes' incident-bin lists are per cell of a grid this much finer (per side) than
 // the bins' (src/gpu/pack.rs LOBE_REFINE).
@@ -132,50 +132,57 @@ struct AdjEntry {
 };
 #else
 layout(push_constant) uniform PassConstants {
-    uint bins;
-    uint rows_per_column;
     uint target_width;
     uint target_height;
     uint quad_width;
     float line_offset;
     float omega;
     uint flags;
-    vec4 environment;  // rgb: environment radiance (scaled); a: source scale (a power of two)
-    uint grid_rows;    // nv: a row stores its bins column by column of the nu x nv grid
     uint sender;       // global pass: the I_ex image of the draw's senders (AR_SENDER_*)
-    uvec2 pad;
+    uint runs;         // global pass: lines per link in the draw
+    vec4 environment;  // rgb: environment radiance (scaled); a: source scale (a power of two)
 } pc;
+
+// The table layout (src/gpu/tables.rs TableLayout) as specialization constants, set per
+// pipeline (src/gpu/layout.rs spec::solver_values): a CPU rasterizer divides by a constant with
+// a multiply and a shift, by a push constant with one scalar division per lane.
+#define AR_SPEC_BINS 8
+#define AR_SPEC_GRID_ROWS 9
+#define AR_SPEC_ROWS_PER_COLUMN 10
+layout(constant_id = AR_SPEC_BINS) const uint AR_BINS = 1u;                  // bins per row, m
+layout(constant_id = AR_SPEC_GRID_ROWS) const uint AR_GRID_ROWS = 1u;        // nv of the bin grid
+layout(constant_id = AR_SPEC_ROWS_PER_COLUMN) const uint AR_ROWS_PER_COLUMN = 1u;
 
 // Position of a bin within its table row: bin iv*nu + iu is stored at iu*nv + iv (one line per
 // run of positions draws a filter's footprint; src/gpu/tables.rs TableLayout::position).
 uint ar_position(uint bin) {
-    uint nu = pc.bins / pc.grid_rows;
-    return (bin % nu) * pc.grid_rows + bin / nu;
+    uint nu = AR_BINS / AR_GRID_ROWS;
+    return (bin % nu) * AR_GRID_ROWS + bin / nu;
 }
 
 
 ivec2 ar_texel(uint row, uint bin) {
-    return ivec2((row / pc.rows_per_column) * pc.bins + ar_position(bin), row % pc.rows_per_column);
+    return ivec2((row / AR_ROWS_PER_COLUMN) * AR_BINS + ar_position(bin), row % AR_ROWS_PER_COLUMN);
 }
 
 ivec2 ar_row_texel(uint row) {
-    return ivec2(row / pc.rows_per_column, row % pc.rows_per_column);
+    return ivec2(row / AR_ROWS_PER_COLUMN, row % AR_ROWS_PER_COLUMN);
 }
 
 // Row and bin of the table texel under a fragment.
 uint ar_row_at(ivec2 p) {
-    return (uint(p.x) / pc.bins) * pc.rows_per_column + uint(p.y);
+    return (uint(p.x) / AR_BINS) * AR_ROWS_PER_COLUMN + uint(p.y);
 }
 
 uint ar_bin_at(ivec2 p) {
-    uint position = uint(p.x) % pc.bins;
-    uint nu = pc.bins / pc.grid_rows;
-    return (position % pc.grid_rows) * nu + position / pc.grid_rows;
+    uint position = uint(p.x) % AR_BINS;
+    uint nu = AR_BINS / AR_GRID_ROWS;
+    return (position % AR_GRID_ROWS) * nu + position / AR_GRID_ROWS;
 }
 
 // Row of the per-row-image texel under a fragment.
 uint ar_row_at_row_image(ivec2 p) {
-    return uint(p.x) * pc.rows_per_column + uint(p.y);
+    return uint(p.x) * AR_ROWS_PER_COLUMN + uint(p.y);
 }
 
 // Rounds to the nearest float16 (ties to even) before a store into a float16 target: some

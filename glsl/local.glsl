@@ -13,7 +13,6 @@ layout(binding = AR_BINDING_LEAF_EX) uniform sampler2D leaf_ex;
 layout(binding = AR_BINDING_L_PUSH) uniform sampler2D l_push;
 layout(binding = AR_BINDING_L_IN) uniform sampler2D l_in;
 layout(binding = AR_BINDING_IRRADIANCE_T) uniform sampler2D irradiance_t;
-layout(binding = AR_BINDING_IRRADIANCE_D) uniform sampler2D irradiance_d;
 layout(binding = AR_BINDING_ATTR_NORMAL_AREA) uniform sampler2D attr_normal_area;
 layout(binding = AR_BINDING_ATTR_LEAF) uniform sampler2D attr_leaf;
 layout(binding = AR_BINDING_DIRECT) uniform sampler2D direct;
@@ -32,19 +31,6 @@ vec3 ar_lt(uint row, uint bin, bool odd) {
     ivec2 t = ar_texel(row, bin);
     vec3 l = odd ? texelFetch(l_in, t, 0).rgb : texelFetch(l_push, t, 0).rgb;
     return AR_ENVIRONMENT ? l + pc.environment.rgb : l;
-}
-
-// Incident direct light (reflected only).
-vec3 ar_ld(uint row, uint bin) {
-    return AR_DIRECT ? texelFetch(direct, ar_texel(row, bin), 0).rgb : vec3(0.0);
-}
-
-// The lobe as the bins sample it (src/brdf.rs DiscreteLobe): the material record carries the
-// effective exponent, lobe_norm the factor of incident bin l that conserves the true albedo.
-vec3 ar_phong(vec3 ks, float ns, vec3 n, vec3 incident, vec3 outgoing, float factor) {
-    vec3 m = incident - 2.0 * dot(incident, n) * n;
-    float c = dot(m, outgoing);
-    return c <= 0.0 ? vec3(0.0) : ks * ((ns + 2.0) / (2.0 * AR_PI) * pow(c, ns) * factor);
 }
 
 void ar_local() {
@@ -69,41 +55,48 @@ void ar_local() {
         } else {
             float base = a * c * cj;
             vec3 e_t = texelFetch(irradiance_t, ar_row_texel(row), 0).rgb;
-            vec3 e_d = texelFetch(irradiance_d, ar_row_texel(row), 0).rgb;
             vec3 r_t = mat.kd.rgb / AR_PI * e_t;
-            vec3 r_d = AR_DIRECT ? mat.kd.rgb / AR_PI * e_d : vec3(0.0);
             if (AR_GLOSSY && mat.kd.a >= 0.0) {
                 // The truncated lobe (src/brdf.rs LOBE_CUTOFF): only incident bins listed for
                 // the mirror direction's bin, and of those only the ones inside the cone.
                 // Lists per cell of a lookup grid AR_LOBE_REFINE times finer than the bins'.
-                uint nu = pc.bins / pc.grid_rows * AR_LOBE_REFINE;
-                uint nv = pc.grid_rows * AR_LOBE_REFINE;
+                uint nu = AR_BINS / AR_GRID_ROWS * AR_LOBE_REFINE;
+                uint nv = AR_GRID_ROWS * AR_LOBE_REFINE;
                 uint head = uint(mat.kd.a) * (nu * nv + 1u);
-                uint b = ar_bin_of(dir - 2.0 * dot(dir, n) * n, nu, nv);
+                vec3 mirrored = dir - 2.0 * dot(dir, n) * n;
+                uint b = ar_bin_of(mirrored, nu, nv);
                 uint first = lobe_bins[head + b];
                 bool all = first == 0xffffffffu;
-                uint count = all ? pc.bins : lobe_bins[head + b + 1u] - first;
+                uint count = all ? AR_BINS : lobe_bins[head + b + 1u] - first;
+                // The lobe as the bins sample it (src/brdf.rs DiscreteLobe): the material
+                // record carries the effective exponent and the truncation cosine (ke.a, at
+                // least 0: the Phong shape is zero behind), lobe_norm the factor of incident bin
+                // l that conserves the true albedo. cos α = mirror(l)·dir = l·mirror(dir).
+                float ns = mat.ks_ns.a;
+                float cut = max(mat.ke.a, 0.0);
+                float scale = (ns + 2.0) / (2.0 * AR_PI) * pc.omega * c;
+                vec3 glossy = vec3(0.0);
                 for (uint k = 0u; k < count; ++k) {
                     uint l = all ? k : lobe_bins[first + k];
                     vec3 inc = centers[l].xyz;
                     float cos_l = -dot(inc, n);
-                    vec3 m = inc - 2.0 * dot(inc, n) * n;
-                    if (cos_l > 0.0 && dot(m, dir) > mat.ke.a) {
+                    float cos_a = dot(inc, mirrored);
+                    if (cos_l > 0.0 && cos_a > cut) {
                         float factor = texelFetch(lobe_norm, ar_texel(row, l), 0).r;
-                        vec3 f = ar_phong(mat.ks_ns.rgb, mat.ks_ns.a, n, inc, dir, factor) * (cos_l * pc.omega * c);
-                        r_t += f * ar_lt(row, l, odd);
-                        if (AR_DIRECT) {
-                            r_d += f * ar_ld(row, l);
-                        }
+                        glossy += (pow(cos_a, ns) * factor * cos_l) * ar_lt(row, l, odd);
                     }
                 }
+                r_t += mat.ks_ns.rgb * scale * glossy;
             }
             tot = base * r_t;
             vec3 ke = AR_EMISSION ? mat.ke.rgb * pc.environment.a : vec3(0.0);
             // Light arriving at the back in bin j is blocked: antiradiance out the front.
             // Not on a closed solid's surface (src/solids.rs): attr_leaf z is 2 where it blocks.
             vec3 blocked = AR_ANTIRADIANCE && lf.z > 1.5 ? ar_lt(row, j, odd) : vec3(0.0);
-            ex = base * (r_t + r_d + ke - blocked);
+            // The first bounce of direct light, reflected once for the whole solve
+            // (src/solver/local.rs direct_exitant), adds to I_ex only.
+            vec3 first = AR_DIRECT ? texelFetch(direct, p, 0).rgb : vec3(0.0);
+            ex = base * (r_t + ke - blocked) + first;
         }
     } else if (cj < 0.0) {
         if (AR_MODE == AR_MODE_REFLECT) {

@@ -8,7 +8,7 @@ layout(location = 0) flat out uint row;
 layout(location = 1) flat out uint other;
 
 void main() {
-    gl_Position = ar_line_end(pair.x, (gl_VertexIndex & 1) == 0 ? 0u : pc.bins);
+    gl_Position = ar_line_end(pair.x, (gl_VertexIndex & 1) == 0 ? 0u : AR_BINS);
     row = pair.x;
     other = pair.y;
 }

@@ -566,7 +566,7 @@ fn a_planned_solver_refuses_sources_it_was_not_planned_for() {
     .unwrap();
     assert!(gpu.set_environment(glam::DVec3::splat(0.1)).is_err());
     let t = antiradiance::solver::Table::zeros(sys.rows(), sys.bins.count);
-    assert!(gpu.set_direct(&t).is_err());
+    assert!(gpu.set_direct(&sys, &t).is_err());
 }
 
 /// The CLI reports the plan: `info --json` and `render --json` list `passes`; `--all-passes`

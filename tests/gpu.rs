@@ -172,7 +172,7 @@ fn compare(
                 DVec3::ZERO
             }
         });
-        gpu.set_direct(cpu.direct_in.as_ref().unwrap()).unwrap();
+        gpu.set_direct(&sys, cpu.direct_in().unwrap()).unwrap();
     }
     let tol = match precision {
         Precision::F16 if common::accumulated_f16(precision, gpu.fallbacks()) => {
@@ -536,11 +536,8 @@ fn embeds_in_a_host_device_and_command_buffer() {
     // from the GPU), its emission out of the bins.
     cpu.emission = prep.plan.features.emission;
     assert!(!cpu.emission && !prep.maps.data.is_empty());
-    cpu.direct_in = Some(antiradiance::frame::lights::direct_in_table(
-        sys,
-        &prep.lights,
-        &prep.maps,
-    ));
+    let direct = antiradiance::frame::lights::direct_in_table(sys, &prep.lights, &prep.maps);
+    cpu.state.set_direct_in(sys, Some(direct));
     cpu.set_environment(scene.environment);
     cpu.solve(Scheme::Symmetric, 3, 4);
     let ex = worst_relative(sys, &cpu.i_ex, &cpu.i_ex, &gpu_ex, false, 0.0);

@@ -86,7 +86,7 @@ impl Backend for CpuBackend {
             .then(|| direct_in_table(&prep.system, &prep.lights, &prep.maps));
         let state = self.state.as_mut().expect("state present");
         state.environment = prep.scene.environment;
-        state.direct_in = direct;
+        state.set_direct_in(&prep.system, direct);
         self.time("direct", t);
         Ok(())
     }

@@ -112,7 +112,7 @@ impl GpuBackend {
     fn set_sources(&mut self, prep: &Prepared) -> Result<()> {
         self.solver.set_environment(prep.scene.environment)?;
         if let Some(d) = &self.direct {
-            self.solver.set_direct(d)?;
+            self.solver.set_direct(&prep.system, d)?;
         }
         Ok(())
     }

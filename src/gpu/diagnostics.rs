@@ -91,6 +91,9 @@ fn draw_lines(
         additive: true,
         write: true,
     }];
+    // Only the table layout matters to span.vert; the feature constants keep their values.
+    let constants =
+        super::layout::spec::solver_values(&crate::plan::Features::ALL, 0, false, layout);
     let desc = PipelineDesc {
         name: frag,
         vert: "span.vert",
@@ -99,7 +102,7 @@ fn draw_lines(
         stride: 8,
         attributes: &[(vk::Format::R32G32_UINT, 0)],
         targets: &targets,
-        specialization: &[],
+        specialization: &constants,
         per_vertex: false,
         depth: false,
     };
@@ -123,13 +126,10 @@ fn draw_lines(
     )
     .create(ctx)?;
     let c = PassConstants {
-        bins: layout.bins,
-        rows_per_column: layout.rows_per_column,
         target_width: layout.width(),
         target_height: layout.rows_per_column,
         quad_width: layout.bins,
         line_offset: ctx.info.line_mode.endpoint_offset(),
-        grid_rows: layout.grid_rows,
         ..Default::default()
     };
     ctx.submit_and_wait(|cmd| unsafe {

@@ -6,10 +6,6 @@
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct PassConstants {
-    /// Bins per row `m`.
-    pub bins: u32,
-    /// Rows stored per column block (`rows_per_column ≤ maxImageDimension2D`).
-    pub rows_per_column: u32,
     /// Width of the bound render target, texels.
     pub target_width: u32,
     /// Height of the bound render target, texels.
@@ -22,17 +18,14 @@ pub struct PassConstants {
     pub omega: f32,
     /// Bit 1: tables are float16 (bit 0 is unused: direct light is a specialization constant).
     pub flags: u32,
-    /// Constant environment radiance times the source scale (rgb); the source scale (a), a
-    /// power of two that every emitted radiance is multiplied by to centre values in float16's range.
-    pub environment: [f32; 4],
-    /// Rows `nv` of the bins' grid: a row stores its bins column by column of the grid
-    /// ([`super::tables::TableLayout::position`]).
-    pub grid_rows: u32,
     /// Global pass: the I_ex image the draw's senders live in
     /// ([`super::tables::sender_image`]); zero elsewhere.
     pub sender: u32,
-    /// Padding to 16 bytes.
-    pub pad: [u32; 2],
+    /// Global pass: receiver-bin runs (lines) per link of the draw; zero elsewhere.
+    pub runs: u32,
+    /// Constant environment radiance times the source scale (rgb); the source scale (a), a
+    /// power of two that every emitted radiance is multiplied by to centre values in float16's range.
+    pub environment: [f32; 4],
 }
 
 /// `PassConstants::flags` bit: tables are float16; shaders round stores to nearest.
@@ -179,36 +172,36 @@ pub mod binding {
     pub const L_PUSH: u32 = 4;
     /// Irradiance from links and environment, one texel per row.
     pub const IRRADIANCE_T: u32 = 5;
-    /// Irradiance from direct light, one texel per row.
-    pub const IRRADIANCE_D: u32 = 6;
     /// Attributes: normal (rgb), area (a).
-    pub const ATTR_NORMAL_AREA: u32 = 7;
+    pub const ATTR_NORMAL_AREA: u32 = 6;
     /// Attributes: cosine normalization, material index, leaf flag.
-    pub const ATTR_LEAF: u32 = 8;
-    /// Direct incident radiance table.
-    pub const DIRECT: u32 = 9;
+    pub const ATTR_LEAF: u32 = 7;
+    /// The leaves' first bounce of direct light per bin ([`crate::solver::local::direct_exitant`]).
+    pub const DIRECT: u32 = 8;
     /// Leaves' I_ex just written by the local pass (read by pull).
-    pub const LEAF_EX_NEXT: u32 = 10;
+    pub const LEAF_EX_NEXT: u32 = 9;
     /// Materials storage buffer.
-    pub const MATERIALS: u32 = 11;
+    pub const MATERIALS: u32 = 10;
     /// Bin center directions storage buffer (vec4 per bin).
-    pub const BIN_CENTERS: u32 = 12;
+    pub const BIN_CENTERS: u32 = 11;
     /// Glossy leaves' lobe factor per incident bin (R32, table layout; 1×1 without glossy leaves).
-    pub const LOBE_NORM: u32 = 13;
+    pub const LOBE_NORM: u32 = 12;
     /// Clusters' I_ex at odd depths (`CLUSTER_EX` holds the even depths): pull writes one
     /// parity per level while reading the other.
-    pub const CLUSTER_EX_ODD: u32 = 14;
+    pub const CLUSTER_EX_ODD: u32 = 13;
     /// Link combos (storage: [`super::GpuCombo`]).
-    pub const COMBOS: u32 = 15;
+    pub const COMBOS: u32 = 14;
     /// Receiver bin runs of the combos (storage: [`super::pack_run`]).
-    pub const RUNS: u32 = 16;
+    pub const RUNS: u32 = 15;
     /// Incident bins each glossy lobe's truncated cone can reach, per mirror bin (storage:
     /// [`crate::gpu::pack::lobe_bins`]).
-    pub const LOBE_BINS: u32 = 17;
+    pub const LOBE_BINS: u32 = 16;
+    /// Link records (storage: [`super::GpuLink`]), pulled by the global pass's vertex index.
+    pub const LINKS: u32 = 17;
     /// Number of bindings.
     pub const COUNT: u32 = 18;
     /// Storage-buffer bindings (the rest are combined image samplers).
-    pub const BUFFERS: [u32; 5] = [MATERIALS, BIN_CENTERS, COMBOS, RUNS, LOBE_BINS];
+    pub const BUFFERS: [u32; 6] = [MATERIALS, BIN_CENTERS, COMBOS, RUNS, LOBE_BINS, LINKS];
 }
 
 /// Push constants of the frame passes (`FrameConstants` in common.glsl, 128 bytes: the
@@ -391,8 +384,16 @@ pub mod spec {
     pub const SPLAT: u32 = 6;
     /// The frame interpolates smooth meshes per vertex.
     pub const VERTEX: u32 = 7;
-    /// Number of constants.
+    /// Number of feature constants ([`values`]).
     pub const COUNT: usize = 8;
+    /// Bins per table row `m` ([`crate::gpu::tables::TableLayout`]; solver passes only).
+    pub const BINS: u32 = 8;
+    /// Rows `nv` of the bins' grid: a row stores its bins column by column of the grid.
+    pub const GRID_ROWS: u32 = 9;
+    /// Rows stored per column block of a table image.
+    pub const ROWS_PER_COLUMN: u32 = 10;
+    /// Number of a solver pipeline's constants ([`solver_values`]).
+    pub const SOLVER_COUNT: usize = 11;
 
     /// The values of every constant for `features` and local-pass mode `mode`.
     pub fn values(f: &crate::plan::Features, mode: u32, glossy: bool) -> [u32; COUNT] {
@@ -406,6 +407,23 @@ pub mod spec {
             f.splat as u32,
             f.vertex as u32,
         ]
+    }
+
+    /// A solver pipeline's constants: [`values`], then the table layout, which the shaders'
+    /// texel addressing divides by (constants let the compiler turn those divisions into
+    /// multiplies; on lavapipe a division by a push constant is a scalar loop per lane).
+    pub fn solver_values(
+        f: &crate::plan::Features,
+        mode: u32,
+        glossy: bool,
+        table: &crate::gpu::tables::TableLayout,
+    ) -> [u32; SOLVER_COUNT] {
+        let mut v = [0; SOLVER_COUNT];
+        v[..COUNT].copy_from_slice(&values(f, mode, glossy));
+        v[BINS as usize] = table.bins;
+        v[GRID_ROWS as usize] = table.grid_rows;
+        v[ROWS_PER_COLUMN as usize] = table.rows_per_column;
+        v
     }
 }
 

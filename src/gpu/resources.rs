@@ -38,15 +38,14 @@ resource_set! {
         pub i_total,
         /// Irradiance from links + environment (one texel per row).
         pub irradiance_t,
-        /// Irradiance from direct light (one texel per row).
-        pub irradiance_d,
         /// Normal and area per row.
         pub attr_normal_area,
         /// Cosine normalization, material, leaf flag per row.
         pub attr_leaf,
         /// Cone-filter tables (R32, one m×m layer per used class).
         pub filter,
-        /// Direct incident radiance (zero until set; 1×1 placeholder for scenes without lights).
+        /// The leaves' first bounce of direct light (zero until set; 1×1 placeholder for scenes
+        /// without lights).
         pub direct,
         /// Lobe factors per glossy leaf and incident bin (1×1 placeholder without glossy leaves).
         pub lobe_norm,
@@ -154,7 +153,6 @@ impl SolverImages<ImageDesc> {
             l_push: img("L_in pushed", tw, th, accum_format, Purpose::Tables),
             i_total: table("I_total"),
             irradiance_t: row("irradiance (links+environment)", format),
-            irradiance_d: row("irradiance (direct)", format),
             attr_normal_area: row("attributes: normal, area", F32X4),
             attr_leaf: row("attributes: cos norm, material", F32X4),
             filter: img(
@@ -198,7 +196,7 @@ impl SolverBuffers<BufferDesc> {
         };
         let rows = |name: &str, r: &[RowPair]| BufferDesc::of::<RowPair>(name, r.len(), vb, prim);
         Self {
-            links: BufferDesc::of::<GpuLink>("links", draw.links.len(), vb, Purpose::Links),
+            links: BufferDesc::of::<GpuLink>("links", draw.links.len().max(1), sb, Purpose::Links),
             combos: BufferDesc::of::<GpuCombo>(
                 "link combos",
                 draw.combos.len().max(1),
@@ -364,7 +362,9 @@ impl Resources {
         let f32x4 = F32X4;
         images.attr_normal_area.upload(&pack::encode(f32x4, &na))?;
         images.attr_leaf.upload(&pack::encode(f32x4, &lf))?;
-        images.filter.upload(as_bytes(&pack::filter_tables(sys)))?;
+        images
+            .filter
+            .upload(as_bytes(&pack::filter_tables(sys, layout)))?;
         let d = &images.direct.desc;
         let zero = vec![[0.0; 4]; (d.width * d.height) as usize];
         images.direct.upload(&pack::encode(plan.format, &zero))?;
@@ -376,7 +376,9 @@ impl Resources {
         let combos = super::pack::padded(draw.combos.clone());
         let runs = super::pack::padded(draw.runs.clone());
         let buffers = SolverBuffers {
-            links: b.links.upload(ctx, as_bytes(&draw.links))?,
+            links: b
+                .links
+                .upload(ctx, as_bytes(&super::pack::padded(draw.links.clone())))?,
             combos: b.combos.upload(ctx, as_bytes(&combos))?,
             runs: b.runs.upload(ctx, as_bytes(&runs))?,
             push: b.push.upload(ctx, as_bytes(&draw.push))?,
@@ -440,7 +442,6 @@ impl Resources {
                 binding::L_IN => &im.l_in,
                 binding::L_PUSH => &im.l_push,
                 binding::IRRADIANCE_T => &im.irradiance_t,
-                binding::IRRADIANCE_D => &im.irradiance_d,
                 binding::ATTR_NORMAL_AREA => &im.attr_normal_area,
                 binding::ATTR_LEAF => &im.attr_leaf,
                 binding::DIRECT => &im.direct,
@@ -459,6 +460,7 @@ impl Resources {
             (binding::COMBOS, b.combos.raw),
             (binding::RUNS, b.runs.raw),
             (binding::LOBE_BINS, b.lobe_bins.raw),
+            (binding::LINKS, b.links.raw),
         ];
         super::pipelines::write_set(ctx, self.sets[p], self.sampler.raw(), &images, &buffers);
     }

@@ -81,7 +81,11 @@ pub struct GpuSolver {
     sys_range: Range,
     precision: Precision,
     environment: DVec3,
+    /// The leaves' first bounce of the direct light
+    /// ([`crate::solver::local::direct_exitant`]), uploaded at the source scale.
     direct: Option<Table>,
+    /// The brightest direct incident radiance (it sets the source scale with the other sources).
+    direct_max: f64,
     scale: f64,
     features: Features,
     /// Whether each row's depth is odd (where push leaves its L_push).
@@ -166,6 +170,7 @@ impl GpuSolver {
             format,
             accum_format,
             features,
+            table: res.plan.layout,
         };
         let mut pipes = SolverPipelines::new(&spec)?;
         // Every local variant now, so no pipeline is built during the iterations.
@@ -178,13 +183,9 @@ impl GpuSolver {
             uploads_ms,
             pipelines_ms: t.elapsed().as_secs_f64() * 1e3,
         };
-        let layout = *res.layout();
         let constants = PassConstants {
-            bins: layout.bins,
-            rows_per_column: layout.rows_per_column,
             line_offset: ctx.info.line_mode.endpoint_offset(),
             omega: sys.bins.omega as f32,
-            grid_rows: layout.grid_rows,
             flags: if precision == Precision::F16 {
                 FLAG_HALF
             } else {
@@ -207,6 +208,7 @@ impl GpuSolver {
             precision,
             environment: DVec3::ZERO,
             direct: None,
+            direct_max: 0.0,
             scale: 1.0,
             features,
             depth_parity: sys
@@ -259,15 +261,22 @@ impl GpuSolver {
         self.update_scale()
     }
 
-    /// Direct incident radiance per node and bin (reflected only), e.g. from
-    /// [`crate::solver::CpuSolver::direct_in`].
-    pub fn set_direct(&mut self, table: &Table) -> Result<()> {
+    /// Direct incident radiance of `sys` per node and bin (reflected only), e.g. from
+    /// [`crate::solver::CpuState::direct_in`]. Its first bounce is reflected here, once, on the
+    /// host ([`crate::solver::local::direct_exitant`], as the CPU solver does), and the local
+    /// pass adds it to I_ex every iteration.
+    pub fn set_direct(&mut self, sys: &System, table: &Table) -> Result<()> {
         if !self.features.direct {
             return Err(Error::Invalid(
                 "direct light was set on a solver planned without lights".into(),
             ));
         }
-        self.direct = Some(table.clone());
+        self.direct_max = table
+            .data
+            .iter()
+            .map(|v| v.max_element())
+            .fold(0.0, f64::max);
+        self.direct = Some(crate::solver::local::direct_exitant(sys, table));
         let before = self.scale;
         self.update_scale()?;
         // update_scale uploads it when the scale changes; otherwise upload it here, once.
@@ -304,6 +313,7 @@ impl GpuSolver {
             format: self.res.plan.format,
             accum_format: self.res.plan.accum_format,
             features: self.features,
+            table: self.res.plan.layout,
         };
         for &m in modes {
             self.pipes.ensure_local(&spec, &self.res, m)?;

@@ -4,19 +4,115 @@
 //! the front, `I_ex = I_L − a·c·cos·L_t` in a front bin. Not on a closed solid's surface
 //! ([`crate::solids`]): light inside a solid was already cancelled by its near face.
 
-use super::{CpuSolver, LocalMode};
-use crate::brdf::{lobe_shape, mirror};
+use super::{CpuSolver, LocalMode, Table};
+use crate::brdf::{lobe_shape, mirror, DiscreteLobe};
+use crate::system::System;
 use glam::DVec3;
 use rayon::prelude::*;
 use std::f64::consts::PI;
+
+/// A leaf's reflection as the local pass samples it: its front-side incident bins with their
+/// quadrature weight (−cos)·ω·c, and its discrete glossy lobe (effective exponent, per-bin
+/// albedo factors, the incident bins' mirror directions).
+struct Reflector<'a> {
+    kd: DVec3,
+    ks: DVec3,
+    incoming: Vec<(usize, f64)>,
+    lobe: Option<(&'a DiscreteLobe, &'a [f32], Vec<DVec3>)>,
+}
+
+impl<'a> Reflector<'a> {
+    fn new(sys: &'a System, slot: usize) -> Self {
+        let leaf = &sys.leaves[slot];
+        let mat = &sys.materials[leaf.material as usize];
+        let (n, w, c) = (leaf.normal, sys.bins.omega, leaf.cos_norm);
+        let incoming: Vec<(usize, f64)> = sys
+            .bins
+            .centers
+            .iter()
+            .enumerate()
+            .filter_map(|(l, d)| {
+                let cos = -d.dot(n);
+                (cos > 0.0).then_some((l, cos * w * c))
+            })
+            .collect();
+        let lobe = sys.lobes[leaf.material as usize]
+            .as_ref()
+            .zip(sys.lobe_factors(slot))
+            .map(|(lobe, f)| {
+                let mirrored = incoming
+                    .iter()
+                    .map(|&(l, _)| mirror(sys.bins.centers[l], n))
+                    .collect();
+                (lobe, f, mirrored)
+            });
+        Self {
+            kd: mat.kd,
+            ks: mat.ks,
+            incoming,
+            lobe,
+        }
+    }
+
+    /// Irradiance of incident radiance `l(bin)`.
+    fn irradiance(&self, l: impl Fn(usize) -> DVec3) -> DVec3 {
+        self.incoming.iter().map(|&(b, wt)| l(b) * wt).sum()
+    }
+
+    /// Radiance reflected toward `dir` of incident radiance `l(bin)` whose irradiance is `e`.
+    fn reflect(&self, e: DVec3, dir: DVec3, l: impl Fn(usize) -> DVec3) -> DVec3 {
+        let mut r = self.kd / PI * e;
+        if let Some((lobe, factors, mirrored)) = &self.lobe {
+            for (&(b, wt), m) in self.incoming.iter().zip(mirrored) {
+                // The truncated lobe (brdf::LOBE_CUTOFF), as the GPU sums it.
+                let cos_alpha = m.dot(dir);
+                if !lobe.keeps(cos_alpha) {
+                    continue;
+                }
+                let shape = lobe_shape(lobe.exponent, cos_alpha);
+                r += self.ks * (shape * factors[b] as f64 * wt) * l(b);
+            }
+        }
+        r
+    }
+}
+
+/// The leaves' first bounce of direct light, per node and bin: `a·c·cos·(kd/π·E_d + Σ f·L_d)`
+/// in front bins (eq. 18's reflection of the direct incident table `direct_in`), zero
+/// elsewhere. It does not change between iterations, so both solvers compute it once per
+/// direct-light table and the local pass adds it, instead of summing the direct light's lobe
+/// every iteration.
+pub fn direct_exitant(sys: &System, direct_in: &Table) -> Table {
+    let m = sys.bins.count;
+    let mut out = Table::zeros(sys.rows(), m);
+    out.data
+        .par_chunks_mut(m)
+        .enumerate()
+        .for_each(|(node, ex)| {
+            let slot = sys.leaf_slot[node];
+            if slot == u32::MAX {
+                return;
+            }
+            let leaf = &sys.leaves[slot as usize];
+            let r = Reflector::new(sys, slot as usize);
+            let ld = |l: usize| direct_in.row(node)[l];
+            let e_d = r.irradiance(ld);
+            for (j, dir) in sys.bins.centers.iter().enumerate() {
+                let cj = dir.dot(leaf.normal);
+                if cj > 0.0 {
+                    ex[j] = leaf.area * leaf.cos_norm * cj * r.reflect(e_d, *dir, ld);
+                }
+            }
+        });
+    out
+}
 
 /// Runs the local pass over all leaves, updating `i_ex` (per `mode`) and `i_total`.
 pub fn local(s: &mut CpuSolver<'_>, mode: LocalMode) {
     let sys = s.sys;
     let s = &mut s.state;
     let m = sys.bins.count;
-    let w = sys.bins.omega;
-    let (l_push, direct, env) = (&s.l_push, s.direct_in.as_ref(), s.environment);
+    let (l_push, direct, env) = (&s.l_push, s.direct_ex.as_ref(), s.environment);
     // Without antiradiance (nothing can occlude) the back bins stay zero.
     let antiradiance = s.antiradiance;
     let emission = s.emission;
@@ -35,32 +131,10 @@ pub fn local(s: &mut CpuSolver<'_>, mode: LocalMode) {
             let ke = if emission { mat.ke } else { DVec3::ZERO };
             let (n, c, a) = (leaf.normal, leaf.cos_norm, leaf.area);
             let lp = l_push.row(node);
-            let dr = direct.map(|d| d.row(node));
-            // Incident bins on the front side, with their quadrature weight (−cos)·ω·c.
-            let incoming: Vec<(usize, f64)> = sys
-                .bins
-                .centers
-                .iter()
-                .enumerate()
-                .filter_map(|(l, d)| {
-                    let cos = -d.dot(n);
-                    (cos > 0.0).then_some((l, cos * w * c))
-                })
-                .collect();
+            let dx = direct.map(|d| d.row(node));
+            let r = Reflector::new(sys, slot as usize);
             let lt = |l: usize| lp[l] + env;
-            let ld = |l: usize| dr.map_or(DVec3::ZERO, |d| d[l]);
-            let e_t: DVec3 = incoming.iter().map(|&(l, wt)| lt(l) * wt).sum();
-            let e_d: DVec3 = incoming.iter().map(|&(l, wt)| ld(l) * wt).sum();
-            // The lobe as the bins sample it (effective exponent, per-bin albedo factors).
-            let lobe = sys.lobes[leaf.material as usize]
-                .zip(sys.lobe_factors(slot as usize))
-                .map(|(lobe, f)| {
-                    let mirrored: Vec<DVec3> = incoming
-                        .iter()
-                        .map(|&(l, _)| mirror(sys.bins.centers[l], n))
-                        .collect();
-                    (lobe, f, mirrored)
-                });
+            let e_t = r.irradiance(lt);
             for (j, dir) in sys.bins.centers.iter().enumerate() {
                 let cj = dir.dot(n);
                 if cj > 0.0 {
@@ -68,20 +142,7 @@ pub fn local(s: &mut CpuSolver<'_>, mode: LocalMode) {
                         continue;
                     }
                     let base = a * c * cj;
-                    let (mut r_t, mut r_d) = (mat.kd / PI * e_t, mat.kd / PI * e_d);
-                    if let Some((lobe, factors, mirrored)) = &lobe {
-                        for (&(l, wt), r) in incoming.iter().zip(mirrored) {
-                            // The truncated lobe (brdf::LOBE_CUTOFF), as the GPU sums it.
-                            let cos_alpha = r.dot(*dir);
-                            if !lobe.keeps(cos_alpha) {
-                                continue;
-                            }
-                            let shape = lobe_shape(lobe.exponent, cos_alpha);
-                            let f = mat.ks * (shape * factors[l] as f64 * wt);
-                            r_t += f * lt(l);
-                            r_d += f * ld(l);
-                        }
-                    }
+                    let r_t = r.reflect(e_t, *dir, lt);
                     tot[j] = base * r_t;
                     // Light arriving at the back in bin j is blocked: antiradiance out the front.
                     let blocked = if antiradiance && leaf.blocks_back {
@@ -89,7 +150,9 @@ pub fn local(s: &mut CpuSolver<'_>, mode: LocalMode) {
                     } else {
                         DVec3::ZERO
                     };
-                    ex[j] = base * (r_t + r_d + ke - blocked);
+                    // The first bounce of direct light ([`direct_exitant`]) adds to I_ex only.
+                    let first = dx.map_or(DVec3::ZERO, |d| d[j]);
+                    ex[j] = base * (r_t + ke - blocked) + first;
                 } else if cj < 0.0 {
                     if mode == LocalMode::Reflect {
                         continue;

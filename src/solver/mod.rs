@@ -74,8 +74,11 @@ pub struct CpuState {
     /// Display intensity: front-bin intensity reflected from light arriving through links and
     /// the environment (emission and the first bounce of direct light are drawn per pixel).
     pub i_total: Table,
-    /// Incident radiance from direct light (shadow-mapped, reflected but creating no antiradiance).
-    pub direct_in: Option<Table>,
+    /// Incident radiance from direct light (shadow-mapped, reflected but creating no
+    /// antiradiance); set with [`CpuState::set_direct_in`].
+    direct_in: Option<Table>,
+    /// Its first bounce ([`local::direct_exitant`]), which the local pass adds to I_ex.
+    direct_ex: Option<Table>,
     /// Constant environment radiance added to every leaf's incident radiance.
     pub environment: DVec3,
     /// Relative change of `I_ex` at every iteration.
@@ -93,6 +96,23 @@ pub struct CpuState {
 }
 
 impl CpuState {
+    /// Sets the direct incident table (or none) and computes its first bounce
+    /// ([`local::direct_exitant`]) once, for every local pass that follows.
+    pub fn set_direct_in(&mut self, sys: &System, direct: Option<Table>) {
+        self.direct_ex = direct.as_ref().map(|t| local::direct_exitant(sys, t));
+        self.direct_in = direct;
+    }
+
+    /// The direct incident table, per node and bin ([`CpuState::set_direct_in`]).
+    pub fn direct_in(&self) -> Option<&Table> {
+        self.direct_in.as_ref()
+    }
+
+    /// The leaves' first bounce of the direct light ([`local::direct_exitant`]).
+    pub fn direct_exitant(&self) -> Option<&Table> {
+        self.direct_ex.as_ref()
+    }
+
     /// Zero tables for `sys`, no light yet.
     pub fn new(sys: &System) -> Self {
         let (n, m) = (sys.rows(), sys.bins.count);
@@ -102,6 +122,7 @@ impl CpuState {
             l_push: Table::zeros(n, m),
             i_total: Table::zeros(n, m),
             direct_in: None,
+            direct_ex: None,
             environment: DVec3::ZERO,
             residuals: Vec::new(),
             energies: Vec::new(),
@@ -161,7 +182,8 @@ impl<'a> CpuSolver<'a> {
                 *v = f(li, b);
             }
         }
-        self.direct_in = Some(t);
+        let sys = self.sys;
+        self.state.set_direct_in(sys, Some(t));
     }
 
     /// Initial state: emission, reflected direct light and environment, antiradiance of the

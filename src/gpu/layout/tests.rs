@@ -24,26 +24,61 @@ fn glsl_fields(name: &str) -> Vec<String> {
 
 #[test]
 fn push_constants_match_glsl() {
-    assert_eq!(size_of::<PassConstants>(), 64);
-    assert_eq!(offset_of!(PassConstants, omega), 24);
+    assert_eq!(size_of::<PassConstants>(), 48);
+    assert_eq!(offset_of!(PassConstants, omega), 16);
+    assert_eq!(offset_of!(PassConstants, sender), 24);
     assert_eq!(offset_of!(PassConstants, environment), 32);
-    assert_eq!(offset_of!(PassConstants, grid_rows), 48);
     assert_eq!(
         glsl_fields("PassConstants"),
         [
-            "bins",
-            "rows_per_column",
             "target_width",
             "target_height",
             "quad_width",
             "line_offset",
             "omega",
             "flags",
-            "environment",
-            "grid_rows",
             "sender",
-            "pad"
+            "runs",
+            "environment"
         ]
+    );
+}
+
+#[test]
+fn specialization_ids_match_glsl() {
+    for (name, id) in [
+        ("AR_SPEC_MODE", spec::MODE),
+        ("AR_SPEC_GLOSSY", spec::GLOSSY),
+        ("AR_SPEC_ANTIRADIANCE", spec::ANTIRADIANCE),
+        ("AR_SPEC_DIRECT", spec::DIRECT),
+        ("AR_SPEC_ENVIRONMENT", spec::ENVIRONMENT),
+        ("AR_SPEC_EMISSION", spec::EMISSION),
+        ("AR_SPEC_SPLAT", spec::SPLAT),
+        ("AR_SPEC_VERTEX", spec::VERTEX),
+        ("AR_SPEC_BINS", spec::BINS),
+        ("AR_SPEC_GRID_ROWS", spec::GRID_ROWS),
+        ("AR_SPEC_ROWS_PER_COLUMN", spec::ROWS_PER_COLUMN),
+    ] {
+        assert!(
+            COMMON.contains(&format!("#define {name} {id}\n")),
+            "{name} is not {id} in common.glsl"
+        );
+    }
+    let t = crate::gpu::tables::TableLayout::with_column_height(100, 32, 4096, 40)
+        .unwrap()
+        .with_grid(4);
+    let v = spec::solver_values(&crate::plan::Features::ALL, mode::REFLECT, true, &t);
+    assert_eq!(
+        v[..spec::COUNT],
+        spec::values(&crate::plan::Features::ALL, mode::REFLECT, true)
+    );
+    assert_eq!(
+        [
+            v[spec::BINS as usize],
+            v[spec::GRID_ROWS as usize],
+            v[spec::ROWS_PER_COLUMN as usize]
+        ],
+        [32, 4, 40]
     );
 }
 
@@ -135,7 +170,6 @@ fn bindings_match_glsl() {
         ("L_IN", binding::L_IN),
         ("L_PUSH", binding::L_PUSH),
         ("IRRADIANCE_T", binding::IRRADIANCE_T),
-        ("IRRADIANCE_D", binding::IRRADIANCE_D),
         ("ATTR_NORMAL_AREA", binding::ATTR_NORMAL_AREA),
         ("ATTR_LEAF", binding::ATTR_LEAF),
         ("DIRECT", binding::DIRECT),
@@ -147,6 +181,7 @@ fn bindings_match_glsl() {
         ("COMBOS", binding::COMBOS),
         ("RUNS", binding::RUNS),
         ("LOBE_BINS", binding::LOBE_BINS),
+        ("LINKS", binding::LINKS),
     ];
     assert_eq!(consts.len() as u32, binding::COUNT);
     for (name, value) in consts {

@@ -3,30 +3,31 @@
 //! sender's I_ex times the form factor is fetched once per line, the fragment shader weights it
 //! by the filter table, and additive blending sums all links of a receiver. Links are drawn in
 //! one draw per sender image and run count (`DrawData::link_buckets`), so the vertex shader
-//! fetches I_ex from one image instead of summing the leaves' and both cluster parities'.
+//! fetches I_ex from one image instead of summing the leaves' and both cluster parities'. The
+//! vertex shader pulls its link record by vertex index (no vertex input, no instances).
 
 use super::{begin_rendering, end_rendering, Load, Pass, PipelineSpec};
 use crate::error::Result;
 use crate::gpu::barrier::{transition, Access};
 use crate::gpu::handle::Owned;
-use crate::gpu::layout::GpuLink;
 use crate::gpu::pipelines::{create, PipelineDesc};
 use crate::gpu::resources::Resources;
 use ash::vk;
 
-/// The global pass's pipeline: link records as instances, additive into L_in.
+/// The global pass's pipeline: link records pulled by vertex index, additive into L_in.
 pub fn pipeline(spec: &PipelineSpec<'_>) -> Result<Owned<vk::Pipeline>> {
     let targets = [spec.accumulate()];
+    let constants = spec.constants(crate::gpu::layout::mode::BOTH, false);
     let desc = PipelineDesc {
         name: "global",
         vert: "global.vert",
         frag: "global.frag",
         topology: vk::PrimitiveTopology::LINE_LIST,
-        stride: std::mem::size_of::<GpuLink>() as u32,
-        attributes: &[(vk::Format::R32G32_UINT, 0), (vk::Format::R32_SFLOAT, 8)],
+        stride: 0,
+        attributes: &[],
         targets: &targets,
-        specialization: &[],
-        per_vertex: false,
+        specialization: &constants,
+        per_vertex: true,
         depth: false,
     };
     create(spec.ctx, spec.layout, &desc)
@@ -52,18 +53,15 @@ pub fn record(p: &Pass<'_>, res: &mut Resources, cur: usize) {
         ],
     );
     begin_rendering(p.ctx, p.cmd, &[(&im.l_in, Load::Clear)]);
-    let mut bound = None;
     for &(sender, runs, first, count) in &res.plan.draw.link_buckets {
-        if bound != Some(sender) {
-            p.bind_sender(
-                &p.pipes.global,
-                im.l_in.extent,
-                res.plan.layout.bins,
-                sender,
-            );
-            bound = Some(sender);
+        p.bind_global(&p.pipes.global, im.l_in.extent, sender, runs);
+        // Vertex indices fit u32: links × 2 × runs ≤ LINK_MAX_ROWS² is not reached, the
+        // records are at most 2³² bytes (checked when packed).
+        unsafe {
+            p.ctx
+                .device
+                .cmd_draw(p.cmd, 2 * runs * count, 1, 2 * runs * first, 0);
         }
-        p.draw_range(res.buffers.links.raw, 2 * runs, first, count);
     }
     end_rendering(p.ctx, p.cmd);
 }

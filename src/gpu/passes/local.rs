@@ -8,16 +8,16 @@ use super::{begin_rendering, end_rendering, Load, Pass, PipelineSpec};
 use crate::error::Result;
 use crate::gpu::barrier::{transition, Access};
 use crate::gpu::handle::Owned;
-use crate::gpu::layout::{mode, spec};
+use crate::gpu::layout::mode;
 use crate::gpu::pipelines::{create, Target};
 use crate::gpu::profiler::{label_begin, label_end};
 use crate::gpu::resources::Resources;
 use ash::vk;
 
-/// The irradiance step's pipeline: one texel per row into the two irradiance images.
+/// The irradiance step's pipeline: one texel per row into the irradiance image.
 pub fn irradiance_pipeline(s: &PipelineSpec<'_>) -> Result<Owned<vk::Pipeline>> {
-    let targets = [s.put(), s.put()];
-    let constants = spec::values(&s.features, mode::BOTH, false);
+    let targets = [s.put()];
+    let constants = s.constants(mode::BOTH, false);
     let desc = quad_desc(
         "local_irradiance",
         "local_irradiance.frag",
@@ -40,7 +40,7 @@ pub fn pipeline(s: &PipelineSpec<'_>, m: u32, glossy: bool) -> Result<Owned<vk::
     let kind = if glossy { "glossy" } else { "diffuse" };
     let names = ["both", "reflect", "antiradiance"];
     let name = format!("local_{kind} ({})", names[m as usize]);
-    let constants = spec::values(&s.features, m, glossy);
+    let constants = s.constants(m, glossy);
     create(
         s.ctx,
         s.layout,
@@ -63,19 +63,10 @@ pub fn record(p: &Pass<'_>, res: &mut Resources, cur: usize, m: u32) {
             (&mut im.l_in, Access::Sampled),
             (&mut im.attr_normal_area, Access::Sampled),
             (&mut im.attr_leaf, Access::Sampled),
-            (&mut im.direct, Access::Sampled),
             (&mut im.irradiance_t, Access::Attachment),
-            (&mut im.irradiance_d, Access::Attachment),
         ],
     );
-    begin_rendering(
-        p.ctx,
-        p.cmd,
-        &[
-            (&im.irradiance_t, Load::Clear),
-            (&im.irradiance_d, Load::Clear),
-        ],
-    );
+    begin_rendering(p.ctx, p.cmd, &[(&im.irradiance_t, Load::Clear)]);
     p.bind(&p.pipes.irradiance, im.irradiance_t.extent, 1);
     p.draw(res.buffers.leaf_quads.raw, 4, draw.leaf_quads.len());
     end_rendering(p.ctx, p.cmd);
@@ -91,7 +82,7 @@ pub fn record(p: &Pass<'_>, res: &mut Resources, cur: usize, m: u32) {
         p.cmd,
         &mut [
             (&mut im.irradiance_t, Access::Sampled),
-            (&mut im.irradiance_d, Access::Sampled),
+            (&mut im.direct, Access::Sampled),
             (old, Access::Sampled),
             (&mut *new, Access::Attachment),
             (&mut im.i_total, Access::Attachment),

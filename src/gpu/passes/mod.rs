@@ -36,9 +36,17 @@ pub struct PipelineSpec<'a> {
     pub accum_format: vk::Format,
     /// What the scene needs (specialization constants).
     pub features: Features,
+    /// The tables' layout (specialization constants of every solver shader).
+    pub table: super::tables::TableLayout,
 }
 
 impl PipelineSpec<'_> {
+    /// The specialization constants of a solver pipeline in local-pass mode `mode`
+    /// ([`super::layout::spec::solver_values`]).
+    pub fn constants(&self, mode: u32, glossy: bool) -> [u32; super::layout::spec::SOLVER_COUNT] {
+        super::layout::spec::solver_values(&self.features, mode, glossy, &self.table)
+    }
+
     /// An additive target in the accumulation format (global, push).
     pub fn accumulate(&self) -> Target {
         Target {
@@ -279,22 +287,35 @@ impl Pass<'_> {
     /// Binds `pipeline`, the set and the push constants for a target of `extent` with rows
     /// `quad_width` texels wide.
     pub fn bind(&self, pipeline: &Owned<vk::Pipeline>, extent: vk::Extent2D, quad_width: u32) {
-        self.bind_sender(pipeline, extent, quad_width, 0);
+        self.bind_with(pipeline, extent, quad_width, 0, 0);
     }
 
-    /// As [`Pass::bind`], with the global pass's sender image ([`PassConstants::sender`]).
-    pub fn bind_sender(
+    /// As [`Pass::bind`] for one global draw: its senders' image and lines per link
+    /// ([`PassConstants::sender`], [`PassConstants::runs`]).
+    pub fn bind_global(
+        &self,
+        pipeline: &Owned<vk::Pipeline>,
+        extent: vk::Extent2D,
+        sender: u32,
+        runs: u32,
+    ) {
+        self.bind_with(pipeline, extent, 0, sender, runs);
+    }
+
+    fn bind_with(
         &self,
         pipeline: &Owned<vk::Pipeline>,
         extent: vk::Extent2D,
         quad_width: u32,
         sender: u32,
+        runs: u32,
     ) {
         let c = PassConstants {
             target_width: extent.width,
             target_height: extent.height,
             quad_width,
             sender,
+            runs,
             ..self.constants
         };
         bind_with_constants(

@@ -19,16 +19,17 @@ pub fn pipelines(spec: &PipelineSpec<'_>) -> Result<[Owned<vk::Pipeline>; 2]> {
         additive: false,
         write: true,
     }];
+    let constants = spec.constants(crate::gpu::layout::mode::BOTH, false);
     Ok([
         create(
             spec.ctx,
             spec.layout,
-            &row_desc("pull (even depths)", "pull_even.frag", &put),
+            &row_desc("pull (even depths)", "pull_even.frag", &put, &constants),
         )?,
         create(
             spec.ctx,
             spec.layout,
-            &row_desc("pull (odd depths)", "pull_odd.frag", &put),
+            &row_desc("pull (odd depths)", "pull_odd.frag", &put, &constants),
         )?,
     ])
 }

@@ -37,7 +37,12 @@ pub fn quad_desc<'a>(
 }
 
 /// One line per node across its row (push and pull), with the row it reads besides its own.
-pub fn row_desc<'a>(name: &'a str, frag: &'a str, targets: &'a [Target]) -> PipelineDesc<'a> {
+pub fn row_desc<'a>(
+    name: &'a str,
+    frag: &'a str,
+    targets: &'a [Target],
+    specialization: &'a [u32],
+) -> PipelineDesc<'a> {
     PipelineDesc {
         name,
         vert: "row.vert",
@@ -46,7 +51,7 @@ pub fn row_desc<'a>(name: &'a str, frag: &'a str, targets: &'a [Target]) -> Pipe
         stride: std::mem::size_of::<RowPair>() as u32,
         attributes: &[(vk::Format::R32G32_UINT, 0)],
         targets,
-        specialization: &[],
+        specialization,
         per_vertex: false,
         depth: false,
     }
@@ -59,16 +64,17 @@ pub fn pipelines(spec: &PipelineSpec<'_>) -> Result<[Owned<vk::Pipeline>; 2]> {
         ..spec.accumulate()
     }];
     let add = [spec.accumulate()];
+    let constants = spec.constants(crate::gpu::layout::mode::BOTH, false);
     Ok([
         create(
             spec.ctx,
             spec.layout,
-            &row_desc("push (even depths)", "push_even.frag", &put),
+            &row_desc("push (even depths)", "push_even.frag", &put, &constants),
         )?,
         create(
             spec.ctx,
             spec.layout,
-            &row_desc("push (odd depths)", "push_odd.frag", &add),
+            &row_desc("push (odd depths)", "push_odd.frag", &add, &constants),
         )?,
     ])
 }

@@ -114,7 +114,7 @@ impl GpuSolver {
         Ok(self.unscale(t))
     }
 
-    /// Uploads the direct-light table at the current source scale (no-op without one).
+    /// Uploads the direct light's first bounce at the current source scale (no-op without one).
     pub(super) fn upload_direct(&mut self) -> Result<()> {
         let Some(table) = &self.direct else {
             return Ok(());
@@ -131,9 +131,7 @@ impl GpuSolver {
     /// direct light; where it changes, the direct light is uploaded again and a solution the
     /// images hold (a warm start across an update) is read back and uploaded at the new scale.
     pub(super) fn update_scale(&mut self) -> Result<()> {
-        let direct_max = self.direct.as_ref().map_or(0.0, |t| {
-            t.data.iter().map(|v| v.max_element()).fold(0.0, f64::max)
-        });
+        let direct_max = self.direct_max;
         let range = Range {
             brightest: self
                 .sys_range
