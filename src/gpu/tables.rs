@@ -482,6 +482,17 @@ impl DrawData {
             })
             .collect();
         buckets.retain(|b| b.1 > 0);
+        // The global pass pulls link `k` of a bucket by vertex index `2·runs·k + …`.
+        if let Some(b) = buckets
+            .iter()
+            .find(|b| 2 * b.1 as u64 * (b.2 as u64 + b.3 as u64) > u32::MAX as u64)
+        {
+            return Err(Error::Invalid(format!(
+                "{} links of {} receiver-bin runs each exceed the global pass's 32-bit vertex index",
+                b.2 + b.3,
+                b.1
+            )));
+        }
         Ok((links, buckets, combos, runs, fragments, lines))
     }
 }

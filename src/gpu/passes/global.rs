@@ -55,8 +55,7 @@ pub fn record(p: &Pass<'_>, res: &mut Resources, cur: usize) {
     begin_rendering(p.ctx, p.cmd, &[(&im.l_in, Load::Clear)]);
     for &(sender, runs, first, count) in &res.plan.draw.link_buckets {
         p.bind_global(&p.pipes.global, im.l_in.extent, sender, runs);
-        // Vertex indices fit u32: links × 2 × runs ≤ LINK_MAX_ROWS² is not reached, the
-        // records are at most 2³² bytes (checked when packed).
+        // Link k is pulled by vertex index 2·runs·k + … (fits 32 bits: DrawData checks).
         unsafe {
             p.ctx
                 .device
