@@ -59,6 +59,8 @@ pub struct DeviceInfo {
     pub driver: String,
     /// `maxImageDimension2D`.
     pub max_image_dimension: u32,
+    /// `maxStorageBufferRange`: the largest storage buffer a shader may read (link records).
+    pub max_storage_buffer_range: u32,
     /// Nanoseconds per timestamp tick.
     pub timestamp_period: f32,
     /// Whether the queue writes timestamps.
@@ -388,6 +390,7 @@ impl Context {
                 .map(|s| s.to_string_lossy().into_owned())
                 .unwrap_or_default(),
             max_image_dimension: props.limits.max_image_dimension2_d,
+            max_storage_buffer_range: props.limits.max_storage_buffer_range,
             timestamp_period: props.limits.timestamp_period,
             timestamps: qprops[queue_family as usize].timestamp_valid_bits > 0,
             line_mode,

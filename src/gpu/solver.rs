@@ -158,6 +158,23 @@ impl GpuSolver {
             opts.column_height.unwrap_or(u32::MAX),
             ctx.info.max_image_dimension,
         )?;
+        // Shaders read the storage buffers whole (the link records by vertex index).
+        let range = ctx.info.max_storage_buffer_range as u64;
+        if let Some(b) = plan
+            .buffers
+            .iter()
+            .find(|b| b.usage.contains(vk::BufferUsageFlags::STORAGE_BUFFER) && b.size > range)
+        {
+            return Err(Error::TooLarge {
+                what: format!(
+                    "GPU buffer '{}' for {} links (maxStorageBufferRange; solver.element_size, solver.oracle)",
+                    b.name,
+                    sys.links.links.len()
+                ),
+                needed_bytes: b.size,
+                limit_bytes: range,
+            });
+        }
         let work = super::work::Work::of(sys, &plan);
         let t = std::time::Instant::now();
         let layouts = Layouts::new(&ctx)?;

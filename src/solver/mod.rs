@@ -163,7 +163,9 @@ impl<'a> CpuSolver<'a> {
         Self::resume(sys, CpuState::new(sys))
     }
 
-    /// Continues from `state` (made for `sys` or a system of the same shape).
+    /// Continues from `state` (made for `sys` or a system of the same shape). Its direct-light
+    /// tables belong to the system they were set for: after a move, set them again
+    /// ([`CpuState::set_direct_in`]), as the engine does.
     pub fn resume(sys: &'a System, state: CpuState) -> Self {
         Self { sys, state }
     }

@@ -58,9 +58,11 @@ impl GpuSolver {
     /// follow: `cmd` must have completed by then, as must every command buffer that used this
     /// solver, and the uploads must come before any other of its commands in `cmd`). Returns
     /// `None`, recording nothing, where `sys` does not have this solver's rows, hierarchy and
-    /// cone classes (the solver must be made anew). The source scale is chosen again for the
-    /// moved system by the next [`GpuSolver::set_direct`] or [`GpuSolver::set_environment`]
-    /// (the engine makes both right after).
+    /// cone classes (the solver must be made anew). The direct light's first bounce belongs to
+    /// the old system (it holds the leaves' normals and lobes): with lights, call
+    /// [`GpuSolver::set_direct`] with the moved system's table before iterating; it, or
+    /// [`GpuSolver::set_environment`] without lights, also chooses the source scale again (the
+    /// engine makes both right after).
     pub fn record_follow(
         &mut self,
         cmd: vk::CommandBuffer,
