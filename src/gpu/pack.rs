@@ -409,28 +409,9 @@ pub fn shadow_views(maps: &ShadowMaps) -> Vec<GpuShadowView> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::Material;
 
     fn plane() -> (Scene, System) {
-        let mut s = Scene::empty();
-        let m = s.add_material(Material {
-            ks: DVec3::splat(0.3),
-            ns: 20.0,
-            ..Material::diffuse("glossy", 0.5)
-        });
-        s.add_mesh(
-            "plane",
-            vec![
-                DVec3::new(0.0, 0.0, 0.0),
-                DVec3::new(1.0, 0.0, 0.0),
-                DVec3::new(1.0, 0.0, -1.0),
-                DVec3::new(0.0, 0.0, -1.0),
-            ],
-            vec![[0, 1, 2], [0, 2, 3]],
-            m,
-        );
-        s.solver.bins = 32;
-        s.solver.element_size = 0.6;
+        let s = crate::scene::test_plane(0.3);
         let sys = System::build(&s).unwrap();
         (s, sys)
     }

@@ -336,3 +336,29 @@ impl Scene {
         (lo, hi)
     }
 }
+
+/// A unit square in the y = 0 plane facing +y (kd 0.5, `ks`, exponent 20) at 32 bins and
+/// element size 0.6: the small scene unit tests discretize.
+#[cfg(test)]
+pub(crate) fn test_plane(ks: f64) -> Scene {
+    let mut s = Scene::empty();
+    let m = s.add_material(Material {
+        ks: DVec3::splat(ks),
+        ns: 20.0,
+        ..Material::diffuse("plane", 0.5)
+    });
+    s.add_mesh(
+        "plane",
+        vec![
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, -1.0),
+            DVec3::new(0.0, 0.0, -1.0),
+        ],
+        vec![[0, 1, 2], [0, 2, 3]],
+        m,
+    );
+    s.solver.bins = 32;
+    s.solver.element_size = 0.6;
+    s
+}

@@ -174,30 +174,10 @@ pub fn local(s: &mut CpuSolver<'_>, mode: LocalMode) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{Material, Scene};
     use crate::solver::CpuSolver;
 
     fn plane(ks: f64) -> System {
-        let mut s = Scene::empty();
-        let m = s.add_material(Material {
-            ks: DVec3::splat(ks),
-            ns: 20.0,
-            ..Material::diffuse("plane", 0.5)
-        });
-        s.add_mesh(
-            "plane",
-            vec![
-                DVec3::new(0.0, 0.0, 0.0),
-                DVec3::new(1.0, 0.0, 0.0),
-                DVec3::new(1.0, 0.0, -1.0),
-                DVec3::new(0.0, 0.0, -1.0),
-            ],
-            vec![[0, 1, 2], [0, 2, 3]],
-            m,
-        );
-        s.solver.bins = 32;
-        s.solver.element_size = 0.6;
-        System::build(&s).unwrap()
+        System::build(&crate::scene::test_plane(ks)).unwrap()
     }
 
     /// Direct light of one radiance in every bin: a Lambertian leaf's first bounce is
