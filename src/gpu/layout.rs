@@ -38,7 +38,7 @@ pub const LINK_MAX_ROWS: u32 = 1 << LINK_ROW_BITS;
 /// Combos a [`GpuLink`] can address (two halves of 10 bits).
 pub const LINK_MAX_COMBOS: u32 = 1 << (2 * (32 - LINK_ROW_BITS));
 
-/// One link as the global pass's per-instance vertex data (12 bytes): the receiver and sender
+/// One link as the global pass pulls it from a storage buffer by vertex index (12 bytes): the receiver and sender
 /// rows, each with half of the link's combo index (central bin, filter layer and the receiver
 /// bin runs it covers, shared by all links alike in those), and the form factor.
 #[repr(C)]
