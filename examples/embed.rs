@@ -54,6 +54,7 @@ struct Host {
     queue: vk::Queue,
     family: u32,
     rectangular_lines: bool,
+    wide_lines: bool,
 }
 
 impl Host {
@@ -109,13 +110,17 @@ impl Host {
             f2 = f2.push_next(&mut lines);
         }
         unsafe { instance.get_physical_device_features2(physical_device, &mut f2) };
+        // Wide lines let the solver draw a link's footprint in fewer lines (optional).
+        let wide_lines = f2.features.wide_lines == vk::TRUE;
         let rectangular_lines = has_lines && lines.rectangular_lines == vk::TRUE;
         let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
             .dynamic_rendering(true)
             .synchronization2(true);
         let mut en_lines =
             vk::PhysicalDeviceLineRasterizationFeaturesEXT::default().rectangular_lines(true);
-        let core = vk::PhysicalDeviceFeatures::default().independent_blend(true);
+        let core = vk::PhysicalDeviceFeatures::default()
+            .independent_blend(true)
+            .wide_lines(wide_lines);
         let prio = [1.0f32];
         let queues = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(family)
@@ -141,6 +146,7 @@ impl Host {
             queue,
             family,
             rectangular_lines,
+            wide_lines,
         })
     }
 }
@@ -324,6 +330,7 @@ fn run() -> Res<()> {
             queue: host.queue,
             queue_family: host.family,
             rectangular_lines: host.rectangular_lines,
+            wide_lines: host.wide_lines,
             debug_utils: true,
         })?;
         let scene = scene();

@@ -1,8 +1,10 @@
 // Layout constants shared by every pass; mirrors src/gpu/layout.rs (tests there compare the two).
-// Tables (I_ex, L_in, L_push, I_total) hold one row per hierarchy node and one texel per bin; rows
-// are split into column blocks of `rows_per_column` so the image stays within maxImageDimension2D:
-// row r, bin j lives at texel ((r / H) * m + j, r % H). Per-row images (attributes, irradiance)
-// use the same rows with one texel each: ((r / H), r % H).
+// Tables (I_ex, I_total) hold one row per hierarchy node and one texel per bin; rows are split
+// into column blocks of `rows_per_column` so the image stays within maxImageDimension2D: row r,
+// bin j lives at texel ((r / H) * m + j, r % H). Per-row images (attributes, irradiance)
+// use the same rows with one texel each: ((r / H), r % H). The incident tables (L_in, L_push)
+// hold each node's bins as a tile of the bins' nu × nv grid (ar_in_texel), so that one wide line
+// of the global pass covers a filter's footprint.
 #ifndef ANTIRADIANCE_COMMON_GLSL
 #define ANTIRADIANCE_COMMON_GLSL
 #extension GL_GOOGLE_include_directive : require
@@ -22,9 +24,8 @@
 #define AR_BINDING_LOBE_NORM 12
 #define AR_BINDING_CLUSTER_EX_ODD 13
 #define AR_BINDING_COMBOS 14
-#define AR_BINDING_RUNS 15
-#define AR_BINDING_LOBE_BINS 16
-#define AR_BINDING_LINKS 17
+#define AR_BINDING_LOBE_BINS 15
+#define AR_BINDING_LINKS 16
 
 // The glossy lobes' incident-bin lists are per cell of a grid this much finer (per side) than
 // the bins' (src/gpu/pack.rs LOBE_REFINE).
@@ -139,7 +140,7 @@ layout(push_constant) uniform PassConstants {
     float omega;
     uint flags;
     uint sender;       // global pass: the I_ex image of the draw's senders (AR_SENDER_*)
-    uint runs;         // global pass: lines per link in the draw
+    uint pad;
     vec4 environment;  // rgb: environment radiance (scaled); a: source scale (a power of two)
 } pc;
 
@@ -149,20 +150,30 @@ layout(push_constant) uniform PassConstants {
 #define AR_SPEC_BINS 8
 #define AR_SPEC_GRID_ROWS 9
 #define AR_SPEC_ROWS_PER_COLUMN 10
+#define AR_SPEC_TILE_NODES 11
 layout(constant_id = AR_SPEC_BINS) const uint AR_BINS = 1u;                  // bins per row, m
 layout(constant_id = AR_SPEC_GRID_ROWS) const uint AR_GRID_ROWS = 1u;        // nv of the bin grid
 layout(constant_id = AR_SPEC_ROWS_PER_COLUMN) const uint AR_ROWS_PER_COLUMN = 1u;
+layout(constant_id = AR_SPEC_TILE_NODES) const uint AR_TILE_NODES = 1u;      // incident tiles per column
+const uint AR_GRID_COLUMNS = AR_BINS / AR_GRID_ROWS;                         // nu of the bin grid
 
-// Position of a bin within its table row: bin iv*nu + iu is stored at iu*nv + iv (one line per
-// run of positions draws a filter's footprint; src/gpu/tables.rs TableLayout::position).
-uint ar_position(uint bin) {
-    uint nu = AR_BINS / AR_GRID_ROWS;
-    return (bin % nu) * AR_GRID_ROWS + bin / nu;
+// Incident tables (src/gpu/tables.rs TableLayout::tile_texel): row r's tile has its bin 0 at
+// ((r / T) * nu, (r % T) * nv), bin iv*nu + iu at offset (iu, iv).
+ivec2 ar_in_origin(uint row) {
+    return ivec2((row / AR_TILE_NODES) * AR_GRID_COLUMNS, (row % AR_TILE_NODES) * AR_GRID_ROWS);
 }
 
+ivec2 ar_in_texel(uint row, uint bin) {
+    return ar_in_origin(row) + ivec2(bin % AR_GRID_COLUMNS, bin / AR_GRID_COLUMNS);
+}
+
+// Bin of the incident-table texel under a fragment.
+uint ar_in_bin_at(ivec2 p) {
+    return (uint(p.y) % AR_GRID_ROWS) * AR_GRID_COLUMNS + uint(p.x) % AR_GRID_COLUMNS;
+}
 
 ivec2 ar_texel(uint row, uint bin) {
-    return ivec2((row / AR_ROWS_PER_COLUMN) * AR_BINS + ar_position(bin), row % AR_ROWS_PER_COLUMN);
+    return ivec2((row / AR_ROWS_PER_COLUMN) * AR_BINS + bin, row % AR_ROWS_PER_COLUMN);
 }
 
 ivec2 ar_row_texel(uint row) {
@@ -175,9 +186,7 @@ uint ar_row_at(ivec2 p) {
 }
 
 uint ar_bin_at(ivec2 p) {
-    uint position = uint(p.x) % AR_BINS;
-    uint nu = AR_BINS / AR_GRID_ROWS;
-    return (position % AR_GRID_ROWS) * nu + position / AR_GRID_ROWS;
+    return uint(p.x) % AR_BINS;
 }
 
 // Row of the per-row-image texel under a fragment.
@@ -206,6 +215,15 @@ vec4 ar_clip(vec2 p) {
 vec4 ar_line_end(uint row, uint position) {
     ivec2 t = ar_texel(row, 0u);
     return ar_clip(vec2(float(t.x) + float(position) + pc.line_offset, float(t.y) + 0.5));
+}
+
+// One end of a line that covers exactly the rectangle of `size` texels at `corner` when drawn
+// `size.y` texels wide (the global pass): along the rectangle's middle row, from its left edge
+// (`far` false) to its right edge. A wide line is a rectangle only in rectangular mode, where
+// pc.line_offset is 0; in Bresenham mode lines are one texel wide.
+vec4 ar_rect_line_end(ivec2 corner, uvec2 size, bool far) {
+    float x = float(corner.x) + (far ? float(size.x) : 0.0) + pc.line_offset;
+    return ar_clip(vec2(x, float(corner.y) + 0.5 * float(size.y)));
 }
 
 // A position outside the target: a line with both ends here draws nothing.

@@ -55,9 +55,7 @@ vec3 ar_display_radiance(uint leaf, vec3 wo) {
     float cb = dot(bin_centers[b].xyz, n);
     uint m = ar_nu() * ar_nv();
     uint row = e.ids.x;
-    // Bins are stored column by column of their grid (common.glsl ar_position).
-    uint position = (b % ar_nu()) * ar_nv() + b / ar_nu();
-    ivec2 t = ivec2((row / pc.sizes.w) * m + position, row % pc.sizes.w);
+    ivec2 t = ivec2((row / pc.sizes.w) * m + b, row % pc.sizes.w);
     return texelFetch(i_total, t, 0).rgb * pc.eye.w / (e.normal_area.w * e.cos_norm.x * cb);
 }
 

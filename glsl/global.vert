@@ -1,50 +1,52 @@
 #version 450
-// Global pass (eq. 16): a link is one line per run of receiver bins it reaches (its filter's
-// support, less the bins a leaf receiver never reads), drawn into the receiver's row of L_in.
-// The sender's I_ex is fetched once per line, here, and handed to the fragments flat. Links are
-// pulled by vertex index (2 · runs vertices each, no instancing): a CPU rasterizer shades
-// vertices eight at a time, which one instance of two vertices would leave three-quarters idle.
+// Global pass (eq. 16): a link is one line per rectangle of receiver bins its filter reaches
+// (its footprint on the bins' grid, less the bins a leaf receiver never reads), drawn as a line
+// as wide as the rectangle is tall into the receiver's tile of L_in. The sender's I_ex is
+// fetched once per line, here, and handed to the fragments flat. Line records are pulled by
+// vertex index (2 vertices each, no instancing): a CPU rasterizer shades vertices eight at a
+// time, which one instance of two vertices would leave three-quarters idle.
 #include "common.glsl"
 
 layout(binding = AR_BINDING_LEAF_EX) uniform sampler2D leaf_ex;
 layout(binding = AR_BINDING_CLUSTER_EX) uniform sampler2D cluster_even;
 layout(binding = AR_BINDING_CLUSTER_EX_ODD) uniform sampler2D cluster_odd;
-layout(std430, binding = AR_BINDING_COMBOS) readonly buffer Combos { uvec2 combos[]; };
-layout(std430, binding = AR_BINDING_RUNS) readonly buffer Runs { uint runs[]; };
+// Combos (src/gpu/layout.rs GpuCombo): bin | layer << 16, the rectangle (u0, v0, width, height,
+// 8 bits each), the mask of the bins that blend (64 bits).
+layout(std430, binding = AR_BINDING_COMBOS) readonly buffer Combos { uvec4 combos[]; };
 
-// Link records (src/gpu/layout.rs GpuLink): receiver | combo_hi << 22, sender | combo_lo << 22,
+// Line records (src/gpu/layout.rs GpuLink): receiver | combo_hi << 22, sender | combo_lo << 22,
 // form factor bits; three words each.
 layout(std430, binding = AR_BINDING_LINKS) readonly buffer Links { uint link_words[]; };
 
 layout(location = 0) flat out vec3 sent;     // F · I_ex(sender, bin)
-layout(location = 1) flat out int filter_row;
-layout(location = 2) flat out int row_start;  // texel column of the receiver row's first position
+layout(location = 1) flat out ivec2 corner;  // texel of the rectangle's first bin
+layout(location = 2) flat out ivec2 filter_at; // filter-table texel of that bin
+layout(location = 3) flat out uint width;    // the rectangle's columns (the mask's row stride)
+layout(location = 4) flat out uvec2 mask;    // bit dv·width + du: bin (du, dv) blends
 
 void main() {
-    uint per = 2u * pc.runs;
-    uint li = uint(gl_VertexIndex) / per;
-    uint k = (uint(gl_VertexIndex) - li * per) >> 1;
+    uint li = uint(gl_VertexIndex) >> 1;
     uvec2 link = uvec2(link_words[3u * li], link_words[3u * li + 1u]);
-    float form_factor = uintBitsToFloat(link_words[3u * li + 2u]);
-    uint mask = (1u << AR_LINK_ROW_BITS) - 1u;
-    uint receiver = link.x & mask;
-    uint sender = link.y & mask;
+    uint mask_bits = (1u << AR_LINK_ROW_BITS) - 1u;
+    uint receiver = link.x & mask_bits;
+    uint sender = link.y & mask_bits;
     uint combo = ((link.x >> AR_LINK_ROW_BITS) << (32u - AR_LINK_ROW_BITS)) | (link.y >> AR_LINK_ROW_BITS);
-    uvec2 c = combos[combo];
+    uvec4 c = combos[combo];
     uint bin = c.x & 0xffffu;
-    if (k >= (c.y >> 24)) {
-        gl_Position = AR_NOWHERE;
-        return;
-    }
-    uint run = runs[(c.y & 0xffffffu) + k];
-    gl_Position = ar_line_end(receiver, (gl_VertexIndex & 1) == 0 ? run & 0xffffu : run >> 16);
-    row_start = ar_texel(receiver, 0u).x;
-    filter_row = int((c.x >> 16) * AR_BINS + bin);
-    // Flat outputs come from the first vertex of a line; the second one skips the fetches.
+    uvec4 r = (uvec4(c.y) >> uvec4(0u, 8u, 16u, 24u)) & 0xffu;
+    ivec2 o = ar_in_origin(receiver) + ivec2(r.xy);
+    // Drawn as wide as the rectangle is tall (the draw's line width).
+    gl_Position = ar_rect_line_end(o, r.zw, (gl_VertexIndex & 1) != 0);
+    corner = o;
+    filter_at = ivec2(r.y * AR_GRID_COLUMNS + r.x, (c.x >> 16) * AR_BINS + bin);
+    width = r.z;
+    mask = c.zw;
+    // Flat outputs come from the first vertex of a line; the second one skips the fetch.
     if ((gl_VertexIndex & 1) == 0) {
+        float form_factor = uintBitsToFloat(link_words[3u * li + 2u]);
         ivec2 s = ar_texel(sender, bin);
         // Leaves and the two cluster parities live in separate images; each draw's senders
-        // live in one of them (links are drawn by sender image), so one fetch per line.
+        // live in one of them (lines are drawn by sender image), so one fetch per line.
         vec3 i_ex = pc.sender == AR_SENDER_LEAF ? texelFetch(leaf_ex, s, 0).rgb
             : pc.sender == AR_SENDER_EVEN ? texelFetch(cluster_even, s, 0).rgb
             : texelFetch(cluster_odd, s, 0).rgb;

@@ -28,7 +28,7 @@ layout(location = 1) out vec4 out_total;
 // Incident radiance the leaf reflects and turns into antiradiance (links + environment). Push
 // leaves it in the L_push image at even depths and in the L_in image at odd ones (`odd`).
 vec3 ar_lt(uint row, uint bin, bool odd) {
-    ivec2 t = ar_texel(row, bin);
+    ivec2 t = ar_in_texel(row, bin);
     vec3 l = odd ? texelFetch(l_in, t, 0).rgb : texelFetch(l_push, t, 0).rgb;
     return AR_ENVIRONMENT ? l + pc.environment.rgb : l;
 }

@@ -24,7 +24,7 @@ void main() {
         float cos_l = -dot(centers[l].xyz, n);
         if (cos_l > 0.0) {
             float wt = cos_l * pc.omega * c;
-            ivec2 t = ar_texel(row, l);
+            ivec2 t = ar_in_texel(row, l);
             vec3 lt = odd ? texelFetch(l_in, t, 0).rgb : texelFetch(l_push, t, 0).rgb;
             st += (AR_ENVIRONMENT ? lt + pc.environment.rgb : lt) * wt;
         }

@@ -10,10 +10,11 @@ layout(location = 1) flat in uint other;
 layout(location = 0) out vec4 pushed;
 
 void main() {
-    uint j = ar_bin_at(ivec2(gl_FragCoord.xy));
-    vec3 v = texelFetch(l_in, ar_texel(row, j), 0).rgb;
+    ivec2 p = ivec2(gl_FragCoord.xy);
+    uint j = ar_in_bin_at(p);
+    vec3 v = texelFetch(l_in, p, 0).rgb;
     if (other != 0xffffffffu && ar_pushes(row, j)) {
-        v += texelFetch(l_in, ar_texel(other, j), 0).rgb;
+        v += texelFetch(l_in, ar_in_texel(other, j), 0).rgb;
     }
     pushed = vec4(v, 0.0);
 }

@@ -10,7 +10,7 @@ layout(location = 1) flat in uint other;
 layout(location = 0) out vec4 pushed;
 
 void main() {
-    uint j = ar_bin_at(ivec2(gl_FragCoord.xy));
+    uint j = ar_in_bin_at(ivec2(gl_FragCoord.xy));
     bool add = ar_pushes(row, j);
-    pushed = add ? vec4(texelFetch(l_push, ar_texel(other, j), 0).rgb, 0.0) : vec4(0.0);
+    pushed = add ? vec4(texelFetch(l_push, ar_in_texel(other, j), 0).rgb, 0.0) : vec4(0.0);
 }

@@ -17,7 +17,7 @@ layout(std430, binding = 6) buffer Results { vec4 results[]; };
 layout(push_constant) uniform ReduceConstants {
     uint bins;
     uint rows_per_column;
-    uint grid_rows;
+    uint pad;
     uint rows;
     uint width;
     uint stage;
@@ -45,9 +45,7 @@ vec4 texel_figures(uint i) {
     if (lf.z == 0.0) {
         return vec4(0.0);
     }
-    uint position = x % pc.bins;
-    uint nu = pc.bins / pc.grid_rows;
-    uint bin = (position % pc.grid_rows) * nu + position / pc.grid_rows;
+    uint bin = x % pc.bins;
     vec3 a = texelFetch(new_ex, ivec2(x, y), 0).rgb;
     vec3 b = texelFetch(old_ex, ivec2(x, y), 0).rgb;
     vec3 n = texelFetch(attr_normal_area, rt, 0).xyz;

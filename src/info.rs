@@ -68,8 +68,16 @@ impl Info {
         let rows = sys.rows() as u64;
         let m = sys.bins.count as u64;
         let format = table_format(plan.precision);
-        let resources =
-            ResourcePlan::new(sys, &plan.features, plan.precision, format, u32::MAX, 16384)?;
+        // Sized as on lavapipe (maxImageDimension2D 16384, lines up to 255 texels wide).
+        let resources = ResourcePlan::new(
+            sys,
+            &plan.features,
+            plan.precision,
+            format,
+            u32::MAX,
+            16384,
+            255,
+        )?;
         let gpu = resources.memory();
         let work = crate::gpu::work::Work::of(sys, &resources);
         let mut mem = gpu.by_name();

@@ -495,6 +495,7 @@ fn memory_follows_the_plan() {
                 format,
                 u32::MAX,
                 ctx.info.max_image_dimension,
+                ctx.info.max_line_width,
             )
             .unwrap()
             .memory();

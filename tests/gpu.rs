@@ -102,7 +102,7 @@ fn lines_cover_each_intended_texel_exactly_once() {
                 .iter()
                 .filter(|s| s.0 == r && j >= s.1 && j < s.2)
                 .count() as f32;
-            let (x, y) = layout.position_texel(r, j);
+            let (x, y) = layout.texel(r, j);
             assert_eq!(hits[(y * w + x) as usize], want, "row {r} position {j}");
         }
     }
@@ -110,6 +110,30 @@ fn lines_cover_each_intended_texel_exactly_once() {
     let total: f32 = hits.iter().sum();
     let expect: u32 = spans.iter().map(|s| s.2 - s.1).sum();
     assert_eq!(total, expect as f32);
+    assert_clean(&ctx);
+}
+
+/// The global pass's wide lines: each covers exactly its rectangle, whatever its height up to
+/// the device's widest line, side by side and overlapping (then counted twice).
+#[test]
+fn wide_lines_cover_each_texel_of_their_rectangle_once() {
+    let ctx = context();
+    let top = ctx.info.max_line_width.min(16);
+    let mut rects = vec![[0u32, 0, 8, 1], [8, 0, 3, 2], [11, 3, 5, 5], [3, 9, 1, 7]];
+    rects.extend((1..=top).map(|h| [16 + h, 1, 2, h]));
+    rects.push([12, 4, 2, 2]);
+    rects.retain(|r| r[3] <= top);
+    let (w, h) = (64u32, 24u32);
+    let hits = antiradiance::gpu::diagnostics::rect_coverage(&ctx, (w, h), &rects).unwrap();
+    for y in 0..h {
+        for x in 0..w {
+            let want = rects
+                .iter()
+                .filter(|r| (r[0]..r[0] + r[2]).contains(&x) && (r[1]..r[1] + r[3]).contains(&y))
+                .count() as f32;
+            assert_eq!(hits[(y * w + x) as usize], want, "texel ({x}, {y})");
+        }
+    }
     assert_clean(&ctx);
 }
 
@@ -141,7 +165,7 @@ fn compare(
     scheme: Scheme,
     precision: Precision,
     iterations: usize,
-    max_dim: Option<u32>,
+    caps: GpuOptions,
     direct: bool,
     force_f16: bool,
     tol: Tol,
@@ -153,9 +177,8 @@ fn compare(
         &sys,
         GpuOptions {
             precision,
-            column_height: max_dim,
             force_table_accumulation: force_f16,
-            ..Default::default()
+            ..caps
         },
     )
     .unwrap();
@@ -249,7 +272,7 @@ fn all_schemes_and_precisions(path: &str, bins: usize, element_size: f64, tol: [
                 scheme,
                 p,
                 8,
-                None,
+                GpuOptions::default(),
                 false,
                 force_f16_accumulation(),
                 tol,
@@ -326,7 +349,9 @@ fn mnroom_matches_cpu() {
 }
 
 /// Environment light (creates antiradiance), a direct-light table (reflected only) and tables
-/// split into column blocks, on the open Cornell box.
+/// split into column blocks, on the open Cornell box; the symmetric scheme with the global
+/// pass's lines one bin row wide (a device without wide lines), the asymmetric one as wide as
+/// the device draws.
 #[test]
 fn environment_direct_and_column_split_match_cpu() {
     let ctx = context();
@@ -338,7 +363,12 @@ fn environment_direct_and_column_split_match_cpu() {
         f16: 3.8e-3,
         f16_accumulated: 8.5e-2,
     };
-    for scheme in [Scheme::Symmetric, Scheme::Asymmetric] {
+    for (scheme, width) in [(Scheme::Symmetric, Some(1)), (Scheme::Asymmetric, None)] {
+        let caps = GpuOptions {
+            column_height: Some(97),
+            max_line_width: width,
+            ..Default::default()
+        };
         for p in [Precision::F32, Precision::F16] {
             let w = compare(
                 &ctx,
@@ -346,12 +376,14 @@ fn environment_direct_and_column_split_match_cpu() {
                 scheme,
                 p,
                 3,
-                Some(97),
+                caps,
                 true,
                 force_f16_accumulation(),
                 tol,
             );
-            eprintln!("environment+direct, 97-row columns, {scheme:?} {p:?}: worst {w:.2e}");
+            eprintln!(
+                "environment+direct, 97-row columns, lines ≤ {width:?} wide, {scheme:?} {p:?}: worst {w:.2e}"
+            );
         }
     }
 }
@@ -367,7 +399,7 @@ fn default_scene_at_full_settings_matches_cpu() {
         Scheme::Symmetric,
         Precision::F16,
         2,
-        None,
+        GpuOptions::default(),
         false,
         force_f16_accumulation(),
         // Measured: f16 2.9e-3 (rows measured at least against the smallest normal float16);
@@ -431,7 +463,7 @@ fn forced_f16_accumulation_error_is_bounded() {
             Scheme::Symmetric,
             Precision::F16,
             8,
-            None,
+            GpuOptions::default(),
             false,
             force,
             tol,
@@ -464,6 +496,7 @@ fn embeds_in_a_host_device_and_command_buffer() {
         queue: host.queue,
         queue_family: host.queue_family,
         rectangular_lines: host.line_rasterization_ext(),
+        wide_lines: host.info.max_line_width > 1,
         debug_utils: true,
     })
     .unwrap();

@@ -102,6 +102,7 @@ impl GpuBackend {
             GpuOptions {
                 precision,
                 column_height: tuning.column_height,
+                max_line_width: None,
                 force_table_accumulation: tuning.force_table_accumulation,
                 features: Some(prep.plan.features),
             },

@@ -67,6 +67,10 @@ pub struct DeviceInfo {
     pub timestamps: bool,
     /// Line rasterization in use.
     pub line_mode: LineMode,
+    /// Widest line the solver draws, texels: `lineWidthRange`'s maximum where the device has
+    /// `wideLines` and rectangular lines, else 1 (the global pass then draws one line per bin
+    /// row of a footprint).
+    pub max_line_width: u32,
     /// Largest single allocation / heap size of device-local memory, bytes.
     pub device_local_bytes: u64,
 }
@@ -157,6 +161,9 @@ pub struct HostDevice {
     pub queue_family: u32,
     /// Whether the host enabled VK_EXT_line_rasterization with `rectangularLines`.
     pub rectangular_lines: bool,
+    /// Whether the host enabled the core `wideLines` feature (the global pass then draws a
+    /// footprint's bin rows as one line).
+    pub wide_lines: bool,
     /// Whether the host's instance has VK_EXT_debug_utils enabled.
     pub debug_utils: bool,
 }
@@ -261,6 +268,7 @@ impl Context {
         }
         unsafe { instance.get_physical_device_features2(physical_device, &mut f2) };
         let blend_ok = f2.features.independent_blend == vk::TRUE;
+        let wide = f2.features.wide_lines == vk::TRUE;
         let (dyn_ok, sync_ok) = (
             f13.dynamic_rendering == vk::TRUE,
             f13.synchronization2 == vk::TRUE,
@@ -291,7 +299,10 @@ impl Context {
             vec![]
         };
         // The antiradiance step masks I_total while writing I_ex: per-attachment blend state.
-        let core = vk::PhysicalDeviceFeatures::default().independent_blend(true);
+        // Wide lines draw a filter's footprint as one line per rectangle of bins.
+        let core = vk::PhysicalDeviceFeatures::default()
+            .independent_blend(true)
+            .wide_lines(wide);
         let mut dinfo = vk::DeviceCreateInfo::default()
             .queue_create_infos(&qinfo)
             .enabled_features(&core)
@@ -320,6 +331,7 @@ impl Context {
             queue_family,
             line_mode,
             rect || bres,
+            wide,
             has_debug,
             messenger,
             log,
@@ -334,6 +346,7 @@ impl Context {
         // Without the extension, strict core lines are rectangular too.
         let line_mode = LineMode::Rectangular;
         let line_ext = host.rectangular_lines;
+        let wide = host.wide_lines;
         Self::finish(
             host.entry,
             host.instance,
@@ -343,6 +356,7 @@ impl Context {
             host.queue_family,
             line_mode,
             line_ext,
+            wide,
             host.debug_utils,
             None,
             Arc::new(ValidationLog::default()),
@@ -361,6 +375,7 @@ impl Context {
         queue_family: u32,
         line_mode: LineMode,
         line_ext: bool,
+        wide_lines: bool,
         has_debug: bool,
         messenger: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
         validation: Arc<ValidationLog>,
@@ -394,6 +409,13 @@ impl Context {
             timestamp_period: props.limits.timestamp_period,
             timestamps: qprops[queue_family as usize].timestamp_valid_bits > 0,
             line_mode,
+            // A horizontal wide line covers whole texel rows only when rasterized as a
+            // rectangle (Bresenham's wide lines are a column of fragments per x).
+            max_line_width: if wide_lines && line_mode == LineMode::Rectangular {
+                (props.limits.line_width_range[1].floor() as u32).max(1)
+            } else {
+                1
+            },
             device_local_bytes,
         };
         let allocator = Allocator::new(&AllocatorCreateDesc {

@@ -1,6 +1,6 @@
-//! Checks of the raster mapping itself: which texels a set of link lines covers. Vulkan's line
-//! rules differ from OpenGL's; the global and pull passes rely on every line hitting each texel
-//! of its span exactly once.
+//! Checks of the raster mapping itself: which texels a set of lines covers. Vulkan's line rules
+//! differ from OpenGL's; the pull pass relies on every line hitting each texel of its span
+//! exactly once, the global pass on every wide line hitting each texel of its rectangle once.
 
 use super::barrier::{transition, Access};
 use super::context::Context;
@@ -29,6 +29,32 @@ pub fn line_coverage(
         "coverage.frag",
         vk::Format::R32G32B32A32_SFLOAT,
     )
+}
+
+/// Draws one line per rectangle `(x0, y0, width, height)` of a `size` target with the
+/// endpoints and line width the global pass uses (`ar_rect_line_end`: as wide as the rectangle
+/// is tall), a fragment shader that adds 1, and returns the hit count of every texel
+/// (row-major). Heights must not pass [`super::context::DeviceInfo::max_line_width`].
+pub fn rect_coverage(ctx: &Arc<Context>, size: (u32, u32), rects: &[[u32; 4]]) -> Result<Vec<f32>> {
+    let mut sorted = rects.to_vec();
+    sorted.sort_by_key(|r| r[3]);
+    let mut groups: Vec<(f32, u32, u32)> = Vec::new();
+    for (i, r) in sorted.iter().enumerate() {
+        match groups.last_mut() {
+            Some(g) if g.0 == r[3] as f32 => g.2 += 1,
+            _ => groups.push((r[3] as f32, i as u32, 1)),
+        }
+    }
+    let format = vk::Format::R32G32B32A32_SFLOAT;
+    let records = Records {
+        vert: "rect.vert",
+        attribute: vk::Format::R32G32B32A32_UINT,
+        stride: 16,
+        bytes: as_bytes(&sorted),
+        groups: &groups,
+    };
+    let layout = TableLayout::new(1, 1, ctx.info.max_image_dimension)?;
+    draw(ctx, &layout, size, "coverage.frag", format, &records)
 }
 
 /// How a device rounds additive blending into float16 targets.
@@ -85,6 +111,38 @@ fn draw_lines(
     frag: &str,
     format: vk::Format,
 ) -> Result<Vec<f32>> {
+    let records: Vec<[u32; 2]> = spans
+        .iter()
+        .map(|&(r, lo, hi)| [r, lo | hi << 16])
+        .collect();
+    let records = Records {
+        vert: "span.vert",
+        attribute: vk::Format::R32G32_UINT,
+        stride: 8,
+        bytes: as_bytes(&records),
+        groups: &[(1.0, 0, spans.len() as u32)],
+    };
+    let size = (layout.width(), layout.rows_per_column);
+    draw(ctx, layout, size, frag, format, &records)
+}
+
+/// Per-instance line records and their draws `(line width, first, count)`.
+struct Records<'a> {
+    vert: &'a str,
+    attribute: vk::Format,
+    stride: u32,
+    bytes: &'a [u8],
+    groups: &'a [(f32, u32, u32)],
+}
+
+fn draw(
+    ctx: &Arc<Context>,
+    layout: &TableLayout,
+    size: (u32, u32),
+    frag: &str,
+    format: vk::Format,
+    records: &Records<'_>,
+) -> Result<Vec<f32>> {
     let layouts = Layouts::new(ctx)?;
     let targets = [Target {
         format,
@@ -96,38 +154,29 @@ fn draw_lines(
         super::layout::spec::solver_values(&crate::plan::Features::ALL, 0, false, layout);
     let desc = PipelineDesc {
         name: frag,
-        vert: "span.vert",
+        vert: records.vert,
         frag,
         topology: vk::PrimitiveTopology::LINE_LIST,
-        stride: 8,
-        attributes: &[(vk::Format::R32G32_UINT, 0)],
+        stride: records.stride,
+        attributes: &[(records.attribute, 0)],
         targets: &targets,
         specialization: &constants,
         per_vertex: false,
         depth: false,
+        wide_lines: true,
     };
     let pipeline = create(ctx, &layouts.pipeline, &desc)?;
-    let records: Vec<[u32; 2]> = spans
-        .iter()
-        .map(|&(r, lo, hi)| [r, lo | hi << 16])
-        .collect();
     let buf = Buffer::upload(
         ctx,
         "coverage lines",
-        as_bytes(&records),
+        records.bytes,
         vk::BufferUsageFlags::VERTEX_BUFFER,
     )?;
-    let mut img = ImageDesc::new(
-        "coverage target",
-        layout.width(),
-        layout.rows_per_column,
-        format,
-        Purpose::Scratch,
-    )
-    .create(ctx)?;
+    let mut img =
+        ImageDesc::new("coverage target", size.0, size.1, format, Purpose::Scratch).create(ctx)?;
     let c = PassConstants {
-        target_width: layout.width(),
-        target_height: layout.rows_per_column,
+        target_width: size.0,
+        target_height: size.1,
         quad_width: layout.bins,
         line_offset: ctx.info.line_mode.endpoint_offset(),
         ..Default::default()
@@ -145,7 +194,10 @@ fn draw_lines(
             as_bytes(std::slice::from_ref(&c)),
         );
         ctx.device.cmd_bind_vertex_buffers(cmd, 0, &[buf.raw], &[0]);
-        ctx.device.cmd_draw(cmd, 2, spans.len() as u32, 0, 0);
+        for &(width, first, count) in records.groups {
+            ctx.device.cmd_set_line_width(cmd, width);
+            ctx.device.cmd_draw(cmd, 2, count, 0, first);
+        }
         end_rendering(ctx, cmd);
     })?;
     Ok(decode(format, &img.read()?).iter().map(|t| t[0]).collect())

@@ -21,8 +21,8 @@ pub struct PassConstants {
     /// Global pass: the I_ex image the draw's senders live in
     /// ([`super::tables::sender_image`]); zero elsewhere.
     pub sender: u32,
-    /// Global pass: receiver-bin runs (lines) per link of the draw; zero elsewhere.
-    pub runs: u32,
+    /// Unused (keeps `environment` 16-byte aligned).
+    pub pad: u32,
     /// Constant environment radiance times the source scale (rgb); the source scale (a), a
     /// power of two that every emitted radiance is multiplied by to centre values in float16's range.
     pub environment: [f32; 4],
@@ -38,9 +38,11 @@ pub const LINK_MAX_ROWS: u32 = 1 << LINK_ROW_BITS;
 /// Combos a [`GpuLink`] can address (two halves of 10 bits).
 pub const LINK_MAX_COMBOS: u32 = 1 << (2 * (32 - LINK_ROW_BITS));
 
-/// One link as the global pass pulls it from a storage buffer by vertex index (12 bytes): the receiver and sender
-/// rows, each with half of the link's combo index (central bin, filter layer and the receiver
-/// bin runs it covers, shared by all links alike in those), and the form factor.
+/// One line of a link as the global pass pulls it from a storage buffer by vertex index (12
+/// bytes): the receiver and sender rows, each with half of the line's combo index (central bin,
+/// filter layer and the receiver bin rectangle it covers, shared by all lines alike in those),
+/// and the form factor. A link whose footprint splits into several rectangles has one record
+/// per rectangle.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct GpuLink {
@@ -77,23 +79,50 @@ impl GpuLink {
     }
 }
 
-/// What links with the same central bin, filter layer and receiver runs share (8 bytes, a
-/// storage-buffer record): `bin | layer << 16` and `first_run | run_count << 24`.
+/// What the lines of links with the same central bin, filter layer and receiver rectangle
+/// share (16 bytes, a storage-buffer record, `uvec4` in the shaders).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
 pub struct GpuCombo {
     /// Central bin (low 16 bits) and filter-table layer (high 16 bits).
     pub bin_layer: u32,
-    /// First run in the run buffer (low 24 bits) and the number of runs (high 8 bits).
-    pub runs: u32,
+    /// The rectangle of the receiver's bin grid the line covers ([`BinRect::packed`]):
+    /// first column, first row, width, height, 8 bits each.
+    pub rect: u32,
+    /// Which of the rectangle's bins blend (bit `dv·width + du`), low and high words.
+    pub mask: [u32; 2],
 }
 
-/// Most runs one combo may have (8 bits).
-pub const MAX_RUNS: u32 = 255;
+/// Bins one line of the global pass may cover: the width of its rectangle times its height
+/// (the fragment shader's mask is 64 bits).
+pub const MAX_RECT_BINS: u32 = 64;
 
-/// One run of consecutive receiver bins `[first, end)` (a storage-buffer record).
-pub fn pack_run(first: u32, end: u32) -> u32 {
-    first | end << 16
+/// A rectangle of the bins' `nu × nv` grid drawn by one line of the global pass, and which of
+/// its bins carry filter weight for a bin the receiver reads (the rest are discarded).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
+pub struct BinRect {
+    /// First grid column.
+    pub u0: u32,
+    /// First grid row.
+    pub v0: u32,
+    /// Columns.
+    pub width: u32,
+    /// Rows (the line's width in texels).
+    pub height: u32,
+    /// Bit `dv·width + du`: bin `(u0 + du, v0 + dv)` is drawn.
+    pub mask: u64,
+}
+
+impl BinRect {
+    /// `u0 | v0 << 8 | width << 16 | height << 24` (grids up to 64 × 64 bins).
+    pub fn packed(&self) -> u32 {
+        self.u0 | self.v0 << 8 | self.width << 16 | self.height << 24
+    }
+
+    /// Bins drawn (blended).
+    pub fn drawn(&self) -> u32 {
+        self.mask.count_ones()
+    }
 }
 
 /// A row and a second row the pass reads (push: the parent; pull: the right child, the left
@@ -191,17 +220,15 @@ pub mod binding {
     pub const CLUSTER_EX_ODD: u32 = 13;
     /// Link combos (storage: [`super::GpuCombo`]).
     pub const COMBOS: u32 = 14;
-    /// Receiver bin runs of the combos (storage: [`super::pack_run`]).
-    pub const RUNS: u32 = 15;
     /// Incident bins each glossy lobe's truncated cone can reach, per mirror bin (storage:
     /// [`crate::gpu::pack::lobe_bins`]).
-    pub const LOBE_BINS: u32 = 16;
+    pub const LOBE_BINS: u32 = 15;
     /// Link records (storage: [`super::GpuLink`]), pulled by the global pass's vertex index.
-    pub const LINKS: u32 = 17;
+    pub const LINKS: u32 = 16;
     /// Number of bindings.
-    pub const COUNT: u32 = 18;
+    pub const COUNT: u32 = 17;
     /// Storage-buffer bindings (the rest are combined image samplers).
-    pub const BUFFERS: [u32; 6] = [MATERIALS, BIN_CENTERS, COMBOS, RUNS, LOBE_BINS, LINKS];
+    pub const BUFFERS: [u32; 5] = [MATERIALS, BIN_CENTERS, COMBOS, LOBE_BINS, LINKS];
 }
 
 /// Push constants of the frame passes (`FrameConstants` in common.glsl, 128 bytes: the
@@ -388,12 +415,14 @@ pub mod spec {
     pub const COUNT: usize = 8;
     /// Bins per table row `m` ([`crate::gpu::tables::TableLayout`]; solver passes only).
     pub const BINS: u32 = 8;
-    /// Rows `nv` of the bins' grid: a row stores its bins column by column of the grid.
+    /// Rows `nv` of the bins' grid: the incident tables' tile height.
     pub const GRID_ROWS: u32 = 9;
     /// Rows stored per column block of a table image.
     pub const ROWS_PER_COLUMN: u32 = 10;
+    /// Incident tables' nodes per column block of tiles (`AR_TILE_NODES`).
+    pub const TILE_NODES: u32 = 11;
     /// Number of a solver pipeline's constants ([`solver_values`]).
-    pub const SOLVER_COUNT: usize = 11;
+    pub const SOLVER_COUNT: usize = 12;
 
     /// The values of every constant for `features` and local-pass mode `mode`.
     pub fn values(f: &crate::plan::Features, mode: u32, glossy: bool) -> [u32; COUNT] {
@@ -423,6 +452,7 @@ pub mod spec {
         v[BINS as usize] = table.bins;
         v[GRID_ROWS as usize] = table.grid_rows;
         v[ROWS_PER_COLUMN as usize] = table.rows_per_column;
+        v[TILE_NODES as usize] = table.tile_nodes;
         v
     }
 }

@@ -111,16 +111,16 @@ pub fn lobe_factors(sys: &System, layout: &TableLayout, width: u32, height: u32)
 }
 
 /// Dense cone-filter tables: one `m × m` layer per used class (row = central bin, column =
-/// the receiver bin's position in a table row, `layout`), at least one layer. Columns go by
-/// position so the global pass's fragments index them by their offset along the row.
-pub fn filter_tables(sys: &System, layout: &TableLayout) -> Vec<f32> {
+/// receiver bin), at least one layer. The global pass's fragments find their column from their
+/// offset in the rectangle of the bins' grid they draw.
+pub fn filter_tables(sys: &System) -> Vec<f32> {
     let m = sys.bins.count;
     let classes = sys.filters.used_classes();
     let mut ft = vec![0.0f32; m * m * classes.len().max(1)];
     for (layer, c) in classes.into_iter().enumerate() {
         for (l, row) in sys.filters.rows[c].iter().enumerate() {
             for &(j, w) in row {
-                ft[(layer * m + l) * m + layout.position(j) as usize] = w;
+                ft[(layer * m + l) * m + j as usize] = w;
             }
         }
     }
@@ -465,10 +465,7 @@ mod tests {
     fn filter_tables_hold_every_used_row() {
         let (_, sys) = plane();
         let m = sys.bins.count;
-        let layout = TableLayout::new(sys.rows() as u32, m as u32, 1 << 14)
-            .unwrap()
-            .with_grid(sys.bins.nv as u32);
-        let ft = filter_tables(&sys, &layout);
+        let ft = filter_tables(&sys);
         let classes = sys.filters.used_classes();
         assert_eq!(ft.len(), m * m * classes.len().max(1));
         for (layer, c) in classes.into_iter().enumerate() {
@@ -479,7 +476,7 @@ mod tests {
                 let want: f32 = row.iter().map(|e| e.1).sum();
                 assert!((sum - want).abs() < 1e-5);
                 for &(j, w) in row {
-                    assert_eq!(ft[(layer * m + l) * m + layout.position(j) as usize], w);
+                    assert_eq!(ft[(layer * m + l) * m + j as usize], w);
                 }
             }
         }

@@ -46,6 +46,8 @@ pub struct PipelineDesc<'a> {
     pub per_vertex: bool,
     /// Reversed depth test (greater: depth 1 is near) and write against a [`super::memory::DEPTH_FORMAT`] attachment.
     pub depth: bool,
+    /// The line width is dynamic state, set per draw (`vkCmdSetLineWidth`; lines only).
+    pub wide_lines: bool,
 }
 
 /// A descriptor-set layout and the pipeline layout made of it plus push constants.
@@ -390,8 +392,13 @@ pub fn create(
         })
         .collect();
     let blend = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blends);
-    let dynamic = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
-    let dyn_state = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic);
+    let dynamic = [
+        vk::DynamicState::VIEWPORT,
+        vk::DynamicState::SCISSOR,
+        vk::DynamicState::LINE_WIDTH,
+    ];
+    let dyn_state = vk::PipelineDynamicStateCreateInfo::default()
+        .dynamic_states(&dynamic[..if desc.wide_lines { 3 } else { 2 }]);
     let formats: Vec<_> = desc.targets.iter().map(|t| t.format).collect();
     let mut rendering =
         vk::PipelineRenderingCreateInfo::default().color_attachment_formats(&formats);

@@ -30,7 +30,7 @@ pub const MAX_BATCH: usize = 64;
 struct ReduceConstants {
     bins: u32,
     rows_per_column: u32,
-    grid_rows: u32,
+    pad: u32,
     rows: u32,
     width: u32,
     stage: u32,
@@ -250,7 +250,7 @@ impl Reducer {
         let mut c = ReduceConstants {
             bins: layout.bins,
             rows_per_column: layout.rows_per_column,
-            grid_rows: layout.grid_rows,
+            pad: 0,
             rows: layout.rows,
             width: layout.width(),
             stage: 0,

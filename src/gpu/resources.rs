@@ -77,10 +77,8 @@ resource_set! {
     pub struct SolverBuffers {
         /// Links (global).
         pub links,
-        /// What links share: central bin, filter layer, runs (global).
+        /// What lines share: central bin, filter layer, receiver bin rectangle (global).
         pub combos,
-        /// Receiver bin runs (global).
-        pub runs,
         /// Push lines, by depth.
         pub push,
         /// Diffuse leaf runs.
@@ -128,6 +126,8 @@ impl SolverImages<ImageDesc> {
     ) -> Self {
         let (tw, th) = (layout.width(), layout.rows_per_column);
         let (rw, rh) = (layout.columns, layout.rows_per_column);
+        // The incident tables hold each node's bins as a tile of the bins' grid.
+        let (iw, ih) = layout.tile_extent();
         let m = layout.bins;
         let img = |name: &str, w, h, f, p| ImageDesc::new(name, w, h, f, p);
         let table = |name: &str| img(name, tw, th, format, Purpose::Tables);
@@ -149,8 +149,8 @@ impl SolverImages<ImageDesc> {
                 CLUSTER_FORMAT,
                 Purpose::Tables,
             ),
-            l_in: img("L_in", tw, th, accum_format, Purpose::Tables),
-            l_push: img("L_in pushed", tw, th, accum_format, Purpose::Tables),
+            l_in: img("L_in", iw, ih, accum_format, Purpose::Tables),
+            l_push: img("L_in pushed", iw, ih, accum_format, Purpose::Tables),
             i_total: table("I_total"),
             irradiance_t: row("irradiance (links+environment)", format),
             attr_normal_area: row("attributes: normal, area", F32X4),
@@ -203,7 +203,6 @@ impl SolverBuffers<BufferDesc> {
                 sb,
                 Purpose::Links,
             ),
-            runs: BufferDesc::of::<u32>("link runs", draw.runs.len().max(1), sb, Purpose::Links),
             push: rows("push lines", &draw.push),
             diffuse_quads: quads("local quads (diffuse)", &draw.diffuse_quads),
             glossy_quads: quads("local quads (glossy)", &draw.glossy_quads),
@@ -254,7 +253,8 @@ pub struct ResourcePlan {
 impl ResourcePlan {
     /// Describes the resources of `sys` with `features` at `precision`; L_in and L_push in
     /// `accum_format`; column blocks of at most `column_height` rows in images no larger than
-    /// `max_image_dimension`.
+    /// `max_image_dimension`; the global pass's lines at most `max_line_width` texels wide
+    /// ([`super::context::DeviceInfo::max_line_width`]).
     pub fn new(
         sys: &System,
         features: &Features,
@@ -262,6 +262,7 @@ impl ResourcePlan {
         accum_format: vk::Format,
         column_height: u32,
         max_image_dimension: u32,
+        max_line_width: u32,
     ) -> Result<Self> {
         let layout = TableLayout::with_column_height(
             sys.rows() as u32,
@@ -269,9 +270,9 @@ impl ResourcePlan {
             max_image_dimension,
             column_height,
         )?
-        .with_grid(sys.bins.nv as u32);
+        .with_grid(sys.bins.nv as u32, max_image_dimension)?;
         let format = table_format(precision);
-        let draw = DrawData::new(sys, &layout, features.glossy_everywhere)?;
+        let draw = DrawData::new(sys, &layout, features.glossy_everywhere, max_line_width)?;
         let glossy_tables =
             features.glossy && (!sys.lobe_norm.is_empty() || features.glossy_everywhere);
         let layers = sys.filters.used_classes().len() as u32;
@@ -362,9 +363,7 @@ impl Resources {
         let f32x4 = F32X4;
         images.attr_normal_area.upload(&pack::encode(f32x4, &na))?;
         images.attr_leaf.upload(&pack::encode(f32x4, &lf))?;
-        images
-            .filter
-            .upload(as_bytes(&pack::filter_tables(sys, layout)))?;
+        images.filter.upload(as_bytes(&pack::filter_tables(sys)))?;
         let d = &images.direct.desc;
         let zero = vec![[0.0; 4]; (d.width * d.height) as usize];
         images.direct.upload(&pack::encode(plan.format, &zero))?;
@@ -374,13 +373,11 @@ impl Resources {
         let centers = super::layout::bin_centers(&sys.bins);
         // Storage buffers may not be empty.
         let combos = super::pack::padded(draw.combos.clone());
-        let runs = super::pack::padded(draw.runs.clone());
         let buffers = SolverBuffers {
             links: b
                 .links
                 .upload(ctx, as_bytes(&super::pack::padded(draw.links.clone())))?,
             combos: b.combos.upload(ctx, as_bytes(&combos))?,
-            runs: b.runs.upload(ctx, as_bytes(&runs))?,
             push: b.push.upload(ctx, as_bytes(&draw.push))?,
             diffuse_quads: b.diffuse_quads.upload(ctx, as_bytes(&draw.diffuse_quads))?,
             glossy_quads: b.glossy_quads.upload(ctx, as_bytes(&draw.glossy_quads))?,
@@ -458,7 +455,6 @@ impl Resources {
             (binding::MATERIALS, b.materials.raw),
             (binding::BIN_CENTERS, b.bin_centers.raw),
             (binding::COMBOS, b.combos.raw),
-            (binding::RUNS, b.runs.raw),
             (binding::LOBE_BINS, b.lobe_bins.raw),
             (binding::LINKS, b.links.raw),
         ];

@@ -34,6 +34,10 @@ pub struct GpuOptions {
     /// Caps the rows per column block below maxImageDimension2D (tests use it to exercise
     /// the column split on small scenes).
     pub column_height: Option<u32>,
+    /// Caps the global pass's line width below the device's
+    /// ([`super::context::DeviceInfo::max_line_width`];
+    /// tests use 1 to exercise the one-line-per-bin-row path of devices without wide lines).
+    pub max_line_width: Option<u32>,
     /// Accumulate L_in and L_push in the table format even where the device truncates
     /// float16 blending (by default such devices accumulate in float32; see [`GpuSolver::fallbacks`]).
     pub force_table_accumulation: bool,
@@ -47,6 +51,7 @@ impl Default for GpuOptions {
         Self {
             precision: Precision::F16,
             column_height: None,
+            max_line_width: None,
             force_table_accumulation: false,
             features: None,
         }
@@ -157,6 +162,8 @@ impl GpuSolver {
             accum_format,
             opts.column_height.unwrap_or(u32::MAX),
             ctx.info.max_image_dimension,
+            opts.max_line_width
+                .map_or(ctx.info.max_line_width, |w| w.min(ctx.info.max_line_width)),
         )?;
         // Shaders read the storage buffers whole (the link records by vertex index).
         let range = ctx.info.max_storage_buffer_range as u64;

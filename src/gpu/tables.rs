@@ -1,19 +1,20 @@
 //! The table layout of §4.1 and the per-instance data the passes draw: one row per hierarchy
-//! node, one texel per bin, rows split into column blocks to respect maxImageDimension2D.
+//! node, one texel per bin, rows split into column blocks to respect maxImageDimension2D. The
+//! incident tables (L_in, L_push) keep each node's bins as a tile of the bins' `nu × nv` grid
+//! instead, so that the global pass draws a filter's round footprint as one wide line.
 
 use super::layout::{
-    pack_run, GpuCombo, GpuLink, QuadInstance, RowPair, LINK_MAX_COMBOS, LINK_MAX_ROWS, MAX_RUNS,
+    BinRect, GpuCombo, GpuLink, QuadInstance, RowPair, LINK_MAX_COMBOS, LINK_MAX_ROWS,
+    MAX_RECT_BINS,
 };
 use crate::error::{Error, Result};
 use crate::solver::Table;
 use crate::system::System;
 use glam::DVec3;
 
-/// Where rows and bins live in the table images. Within a row, bins are stored column by column
-/// of their `nu × nv` grid (position `iu·nv + iv` for bin `iv·nu + iu`): the grid's cells are up
-/// to twice as tall as wide on the octahedral square, so a filter's round footprint covers
-/// about half as many grid columns as grid rows, and the global pass draws one line per
-/// consecutive run of positions.
+/// Where rows and bins live in the table images: bin `j` of row `r` at texel `(column block ·
+/// m + j, r mod rows_per_column)`, except in the incident tables (L_in, L_push), which keep a
+/// node's bins as a tile of the bins' `nu × nv` grid ([`TableLayout::tile_texel`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct TableLayout {
     /// Rows (hierarchy nodes).
@@ -24,8 +25,13 @@ pub struct TableLayout {
     pub rows_per_column: u32,
     /// Column blocks.
     pub columns: u32,
-    /// Rows `nv` of the bins' grid (1: positions are bin indices).
+    /// Rows `nv` of the bins' grid (the incident tables' tile height; 1 until
+    /// [`TableLayout::with_grid`]).
     pub grid_rows: u32,
+    /// Incident tables: nodes per column block of tiles (each tile `nu` wide, `nv` tall).
+    pub tile_nodes: u32,
+    /// Incident tables: column blocks of tiles.
+    pub tile_columns: u32,
 }
 
 impl TableLayout {
@@ -59,36 +65,78 @@ impl TableLayout {
             rows_per_column,
             columns,
             grid_rows: 1,
+            tile_nodes: rows_per_column,
+            tile_columns: columns,
         })
     }
 
-    /// The same layout with bins stored column by column of a grid of `nv` rows.
-    pub fn with_grid(self, nv: u32) -> Self {
+    /// The same layout with the incident tables' tiles `nu × nv` (the bins' grid): `rows_per_column / nv` nodes per column block, so the
+    /// tiled images are about as large as the others.
+    pub fn with_grid(self, nv: u32, max_dim: u32) -> Result<Self> {
         debug_assert!(nv >= 1 && self.bins % nv == 0);
-        Self {
-            grid_rows: nv,
-            ..self
+        let tile_nodes = (self.rows_per_column / nv).max(1);
+        let tile_columns = self.rows.div_ceil(tile_nodes).max(1);
+        let nu = self.bins / nv;
+        if tile_columns as u64 * nu as u64 > max_dim as u64 || tile_nodes * nv > max_dim.max(nv) {
+            return Err(Error::TooLarge {
+                what: format!(
+                    "incident tables for {} nodes in tiles of {nu}×{nv} bins (maxImageDimension2D {max_dim})",
+                    self.rows
+                ),
+                needed_bytes: self.rows as u64 * self.bins as u64 * 8,
+                limit_bytes: max_dim as u64 * max_dim as u64 * 8,
+            });
         }
+        Ok(Self {
+            grid_rows: nv,
+            tile_nodes,
+            tile_columns,
+            ..self
+        })
     }
 
-    /// Position of `bin` within its row (`ar_position` in common.glsl).
-    pub fn position(&self, bin: u32) -> u32 {
-        let (nv, nu) = (self.grid_rows, self.bins / self.grid_rows);
-        (bin % nu) * nv + bin / nu
+    /// Columns `nu` of the bins' grid.
+    pub fn grid_columns(&self) -> u32 {
+        self.bins / self.grid_rows
     }
 
-    /// The bin stored at `position` of a row (`ar_bin_at` in common.glsl).
-    pub fn bin_at(&self, position: u32) -> u32 {
-        let (nv, nu) = (self.grid_rows, self.bins / self.grid_rows);
-        (position % nv) * nu + position / nv
-    }
-
-    /// Texel of `(row, position within the row)`.
-    pub fn position_texel(&self, row: u32, position: u32) -> (u32, u32) {
+    /// Incident tables' image size, texels.
+    pub fn tile_extent(&self) -> (u32, u32) {
         (
-            (row / self.rows_per_column) * self.bins + position,
-            row % self.rows_per_column,
+            self.tile_columns * self.grid_columns(),
+            self.tile_nodes * self.grid_rows,
         )
+    }
+
+    /// Incident tables: texel of bin 0 of `row`'s tile (`ar_in_origin` in common.glsl).
+    pub fn tile_origin(&self, row: u32) -> (u32, u32) {
+        (
+            (row / self.tile_nodes) * self.grid_columns(),
+            (row % self.tile_nodes) * self.grid_rows,
+        )
+    }
+
+    /// Incident tables: texel of `(row, bin)`, bin `iv·nu + iu` at `(iu, iv)` of the row's tile.
+    pub fn tile_texel(&self, row: u32, bin: u32) -> (u32, u32) {
+        let (x, y) = self.tile_origin(row);
+        let nu = self.grid_columns();
+        (x + bin % nu, y + bin / nu)
+    }
+
+    /// Converts texels of an incident table read back (row-major over [`Self::tile_extent`])
+    /// into a [`Table`].
+    pub fn tiles_to_table(&self, rgba: &[[f32; 4]]) -> Table {
+        let mut t = Table::zeros(self.rows as usize, self.bins as usize);
+        let w = self.tile_extent().0 as usize;
+        for r in 0..self.rows {
+            for j in 0..self.bins {
+                let (x, y) = self.tile_texel(r, j);
+                let v = rgba[y as usize * w + x as usize];
+                t.data[(r * self.bins + j) as usize] =
+                    DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64);
+            }
+        }
+        t
     }
 
     /// Table image width, texels.
@@ -96,9 +144,12 @@ impl TableLayout {
         self.columns * self.bins
     }
 
-    /// Texel of `(row, bin)`.
+    /// Texel of `(row, bin)` (`ar_texel` in common.glsl).
     pub fn texel(&self, row: u32, bin: u32) -> (u32, u32) {
-        self.position_texel(row, self.position(bin))
+        (
+            (row / self.rows_per_column) * self.bins + bin,
+            row % self.rows_per_column,
+        )
     }
 
     /// Texel of a row in the per-row images (attributes, irradiance).
@@ -159,18 +210,24 @@ impl TableLayout {
 /// Everything the passes draw, built once from the [`System`].
 #[derive(Debug, Clone, Default)]
 pub struct DrawData {
-    /// One per link (global), ordered by the sender's image ([`sender_image`]), then by run
-    /// count: the links of a bucket with `k` runs are drawn with `2k` vertices each.
+    /// One record per line of the global pass (a link has one per rectangle of receiver bins
+    /// it covers, [`bin_rects`]), ordered by the sender's image ([`sender_image`]), then by the
+    /// rectangle's height (the draw's line width).
     pub links: Vec<GpuLink>,
-    /// `(sender image, runs, first link, link count)` of each draw of the global pass.
+    /// `(sender image, line width, first record, record count)` of each draw of the global pass.
     pub link_buckets: Vec<(u32, u32, u32, u32)>,
-    /// What links with the same central bin, filter layer and receiver runs share.
+    /// Links drawn (each has one record per rectangle).
+    pub link_count: usize,
+    /// The widest line (tallest rectangle) the records were made for.
+    pub max_line_width: u32,
+    /// What lines with the same central bin, filter layer and receiver rectangle share.
     pub combos: Vec<GpuCombo>,
-    /// Receiver bin runs of the combos ([`pack_run`]).
-    pub runs: Vec<u32>,
-    /// Fragments the global pass draws (Σ run lengths over links), all of them blended.
+    /// Fragments the global pass rasterizes (Σ rectangle areas over lines).
     pub global_fragments: u64,
-    /// Lines the global pass draws (Σ runs over links).
+    /// Fragments it blends: bins with filter weight that the receiver reads (the rest of a
+    /// rectangle is discarded).
+    pub global_blended: u64,
+    /// Lines the global pass draws.
     pub global_lines: u64,
     /// Filter-table layer of each cone class (`u16::MAX` when unused).
     pub class_layer: Vec<u16>,
@@ -243,33 +300,102 @@ pub const SENDER_EVEN: u32 = 1;
 /// [`sender_image`]: a cluster at odd depth (`AR_SENDER_ODD`).
 pub const SENDER_ODD: u32 = 2;
 
-/// Maximal runs `[first, end)` of consecutive positions (in `layout`) of the bins of a filter
-/// row (`(bin, weight)`) that `keep` accepts.
-pub fn bin_runs(
-    layout: &TableLayout,
+/// The rectangles of the bins' `nu × nv` grid that the global pass draws for one filter row
+/// (`(bin, weight)`), keeping the weighted bins `keep` accepts: one per 4-connected component
+/// of them (a footprint the octahedral map's seam splits has several), cut into bands of at
+/// most `max_height` rows and [`MAX_RECT_BINS`] bins. Every kept bin is in exactly one mask.
+pub fn bin_rects(
+    nu: u32,
+    nv: u32,
     row: &[(u32, f32)],
     keep: impl Fn(u32) -> bool,
-) -> Vec<(u32, u32)> {
-    let mut positions: Vec<u32> = row
-        .iter()
-        .filter(|e| keep(e.0))
-        .map(|e| layout.position(e.0))
-        .collect();
-    positions.sort_unstable();
-    let mut runs: Vec<(u32, u32)> = Vec::new();
-    for p in positions {
-        match runs.last_mut() {
-            Some(r) if r.1 == p => r.1 = p + 1,
-            _ => runs.push((p, p + 1)),
+    max_height: u32,
+) -> Vec<BinRect> {
+    let m = (nu * nv) as usize;
+    let mut on = vec![false; m];
+    for &(j, w) in row {
+        if w != 0.0 && keep(j) {
+            on[j as usize] = true;
         }
     }
-    runs
+    let mut seen = vec![false; m];
+    let (mut rects, mut stack, mut comp) = (Vec::new(), Vec::new(), Vec::new());
+    for start in 0..m {
+        if !on[start] || seen[start] {
+            continue;
+        }
+        comp.clear();
+        seen[start] = true;
+        stack.push(start as u32);
+        while let Some(b) = stack.pop() {
+            comp.push(b);
+            let (u, v) = (b % nu, b / nu);
+            let near = [
+                (u > 0).then(|| b - 1),
+                (u + 1 < nu).then(|| b + 1),
+                (v > 0).then(|| b - nu),
+                (v + 1 < nv).then(|| b + nu),
+            ];
+            for n in near.into_iter().flatten() {
+                if on[n as usize] && !seen[n as usize] {
+                    seen[n as usize] = true;
+                    stack.push(n);
+                }
+            }
+        }
+        // Column range of the component in each of its grid rows (connected: none is empty).
+        let vmin = comp.iter().map(|b| b / nu).min().unwrap_or(0);
+        let vmax = comp.iter().map(|b| b / nu).max().unwrap_or(0);
+        let mut span = vec![(u32::MAX, 0u32); (vmax - vmin + 1) as usize];
+        for b in &comp {
+            let s = &mut span[(b / nu - vmin) as usize];
+            *s = (s.0.min(b % nu), s.1.max(b % nu + 1));
+        }
+        let mut v = vmin;
+        while v <= vmax {
+            // Grow the band row by row while it stays within the line width and the mask.
+            let (mut lo, mut hi) = span[(v - vmin) as usize];
+            let mut end = v + 1;
+            while end <= vmax {
+                let (a, z) = span[(end - vmin) as usize];
+                let (l, h) = (lo.min(a), hi.max(z));
+                if end + 1 - v > max_height.max(1) || (h - l) * (end + 1 - v) > MAX_RECT_BINS {
+                    break;
+                }
+                (lo, hi) = (l, h);
+                end += 1;
+            }
+            let mut r = BinRect {
+                u0: lo,
+                v0: v,
+                width: hi - lo,
+                height: end - v,
+                mask: 0,
+            };
+            for b in &comp {
+                let (u, w) = (b % nu, b / nu);
+                if (v..end).contains(&w) {
+                    r.mask |= 1u64 << ((w - v) * r.width + (u - lo));
+                }
+            }
+            rects.push(r);
+            v = end;
+        }
+    }
+    rects
 }
 
 impl DrawData {
     /// Builds the draw data of `sys` in `layout`.
-    /// `glossy_everywhere` sends every leaf through the general BRDF pass (`--all-passes`).
-    pub fn new(sys: &System, layout: &TableLayout, glossy_everywhere: bool) -> Result<Self> {
+    /// `glossy_everywhere` sends every leaf through the general BRDF pass (`--all-passes`);
+    /// `max_line_width` is the widest line the device draws (1 without wide lines): the global
+    /// pass's rectangles are at most that many bin rows tall.
+    pub fn new(
+        sys: &System,
+        layout: &TableLayout,
+        glossy_everywhere: bool,
+        max_line_width: u32,
+    ) -> Result<Self> {
         if sys.rows() as u64 > LINK_MAX_ROWS as u64 {
             return Err(Error::TooLarge {
                 what: format!(
@@ -285,8 +411,7 @@ impl DrawData {
         for (layer, c) in sys.filters.used_classes().into_iter().enumerate() {
             class_layer[c] = layer as u16;
         }
-        let (links, link_buckets, combos, runs, global_fragments, global_lines) =
-            Self::links(sys, layout, &class_layer)?;
+        let lines = Self::links(sys, layout, &class_layer, max_line_width)?;
         let h = &sys.hierarchy;
         let depth = h.max_depth() as usize;
         let mut push_by_depth: Vec<Vec<RowPair>> = vec![Vec::new(); depth + 1];
@@ -351,12 +476,14 @@ impl DrawData {
         let glossy_quads = runs_of(&glossy_leaf);
         let leaf_quads = runs_of(&|r| sys.leaf_slot[r as usize] != u32::MAX);
         Ok(Self {
-            links,
-            link_buckets,
-            combos,
-            runs,
-            global_fragments,
-            global_lines,
+            links: lines.records,
+            link_count: sys.links.links.len(),
+            max_line_width,
+            link_buckets: lines.buckets,
+            combos: lines.combos,
+            global_fragments: lines.fragments,
+            global_blended: lines.blended,
+            global_lines: lines.lines,
             class_layer,
             push,
             push_levels,
@@ -368,31 +495,28 @@ impl DrawData {
         })
     }
 
-    /// Link records, their draw buckets, combos and runs, and the fragment and line counts.
-    #[allow(clippy::type_complexity)]
+    /// The global pass's line records, their draw buckets and combos, and its counts.
     fn links(
         sys: &System,
         layout: &TableLayout,
         class_layer: &[u16],
-    ) -> Result<(
-        Vec<GpuLink>,
-        Vec<(u32, u32, u32, u32)>,
-        Vec<GpuCombo>,
-        Vec<u32>,
-        u64,
-        u64,
-    )> {
+        max_line_width: u32,
+    ) -> Result<GlobalLines> {
         use std::collections::HashMap;
         type Fast<K, V> = HashMap<K, V, std::hash::BuildHasherDefault<FxHasher>>;
-        let mut combo_of: Fast<(u16, u16, Vec<(u32, u32)>), u32> = Fast::default();
-        let (mut combos, mut runs) = (Vec::new(), Vec::new());
-        let (mut fragments, mut lines) = (0u64, 0u64);
-        // Every link's combo and run count. The runs depend on the central bin, the cone class
-        // and which bins the receiver reads: all of them for a cluster, those facing the sides
-        // the link reaches for a leaf (`System::reads`: its normal and the sides). So they are
-        // cached per (normal, bin, class, sides) over the whole scene (coplanar leaves share).
-        let mut per_link: Vec<(u32, u32)> = Vec::with_capacity(sys.links.links.len());
-        let mut cache: Fast<([u64; 3], u16, u8, u8), (u32, u32)> = Fast::default();
+        let (nu, nv) = (layout.grid_columns(), layout.grid_rows);
+        let max_height = max_line_width.clamp(1, nv);
+        let mut combo_of: Fast<(u32, BinRect), u32> = Fast::default();
+        let mut combos: Vec<GpuCombo> = Vec::new();
+        // Each link's shape: the combos of its rectangles, shared by links alike in the
+        // central bin, the cone class and which bins the receiver reads: all of them for a
+        // cluster, those facing the sides the link reaches for a leaf (`System::reads`: its
+        // normal and the sides). So shapes are cached per (normal, bin, class, sides) over the
+        // whole scene (coplanar leaves share).
+        let mut shapes: Vec<Vec<u32>> = Vec::new();
+        let mut per_link: Vec<u32> = Vec::with_capacity(sys.links.links.len());
+        let mut cache: Fast<([u64; 3], u16, u8, u8), u32> = Fast::default();
+        let mut out = GlobalLines::default();
         for l in &sys.links.links {
             let reader = match sys.leaf_slot[l.receiver as usize] {
                 u32::MAX => ([u64::MAX; 3], 0),
@@ -402,99 +526,99 @@ impl DrawData {
                 }
             };
             let key = (reader.0, l.receiver_bin, l.cone, reader.1);
-            let entry = if let Some(e) = cache.get(&key) {
-                *e
+            let shape = if let Some(&e) = cache.get(&key) {
+                e
             } else {
                 let row = sys
                     .filters
                     .row(l.cone, l.receiver_bin as u32)
                     .expect("table of a used cone class");
-                let r = bin_runs(layout, row, |j| sys.reads(l, j as usize));
-                let layer = class_layer[l.cone as usize];
-                let count = r.len() as u32;
-                if count > MAX_RUNS {
-                    return Err(Error::Invalid(format!(
-                        "a link covers {count} runs of receiver bins, more than {MAX_RUNS}"
-                    )));
-                }
-                let len: u32 = r.iter().map(|(a, b)| b - a).sum();
-                let next = combos.len() as u32;
-                let id = *combo_of
-                    .entry((l.receiver_bin, layer, r.clone()))
-                    .or_insert_with(|| {
-                        combos.push(GpuCombo {
-                            bin_layer: l.receiver_bin as u32 | (layer as u32) << 16,
-                            runs: runs.len() as u32 | count << 24,
-                        });
-                        runs.extend(r.iter().map(|&(a, b)| pack_run(a, b)));
-                        next
-                    });
-                let e = (id, count | len << 8);
-                cache.insert(key, e);
-                e
+                let rects = bin_rects(nu, nv, row, |j| sys.reads(l, j as usize), max_height);
+                let bin_layer = l.receiver_bin as u32 | (class_layer[l.cone as usize] as u32) << 16;
+                let ids = rects
+                    .iter()
+                    .map(|r| {
+                        let next = combos.len() as u32;
+                        *combo_of.entry((bin_layer, *r)).or_insert_with(|| {
+                            combos.push(GpuCombo {
+                                bin_layer,
+                                rect: r.packed(),
+                                mask: [r.mask as u32, (r.mask >> 32) as u32],
+                            });
+                            next
+                        })
+                    })
+                    .collect();
+                shapes.push(ids);
+                cache.insert(key, shapes.len() as u32 - 1);
+                shapes.len() as u32 - 1
             };
-            fragments += (entry.1 >> 8) as u64;
-            lines += (entry.1 & 0xff) as u64;
-            per_link.push(entry);
+            per_link.push(shape);
         }
-        if combos.len() as u64 > LINK_MAX_COMBOS as u64 || runs.len() >= 1 << 24 {
+        if combos.len() as u64 > LINK_MAX_COMBOS as u64 {
             return Err(Error::Invalid(format!(
-                "{} link combos and {} runs exceed what a link record addresses ({LINK_MAX_COMBOS} combos, 2^24 runs)",
+                "{} link combos exceed what a link record addresses ({LINK_MAX_COMBOS})",
                 combos.len(),
-                runs.len()
             )));
         }
-        // Order the records by the sender's image, then run count: one draw per (image, count),
-        // `2·runs` vertices per link, and the vertex shader fetches I_ex from that image only.
-        // A counting sort (stable): at most 3 × 256 keys.
-        let key: Vec<u32> = sys
-            .links
-            .links
-            .iter()
-            .zip(&per_link)
-            .map(|(l, e)| sender_image(sys, l.sender) << 8 | (e.1 & 0xff))
-            .collect();
-        let mut start = vec![0u32; 3 << 8 | 1];
-        for &k in &key {
-            start[k as usize + 1] += 1;
+        // One record per (link, rectangle), ordered by the sender's image, then the
+        // rectangle's height: one draw per (image, height) with that line width, and the
+        // vertex shader fetches I_ex from that image only. A counting sort (stable).
+        let height = |c: u32| combos[c as usize].rect >> 24;
+        let keys = (max_height + 1) as usize;
+        let mut start = vec![0u32; 3 * keys + 1];
+        for (l, &shape) in sys.links.links.iter().zip(&per_link) {
+            for &c in &shapes[shape as usize] {
+                start[sender_image(sys, l.sender) as usize * keys + height(c) as usize + 1] += 1;
+            }
         }
         for i in 1..start.len() {
             start[i] += start[i - 1];
         }
-        let mut order = vec![0u32; key.len()];
-        for (i, &k) in key.iter().enumerate() {
-            order[start[k as usize] as usize] = i as u32;
-            start[k as usize] += 1;
+        let total = start[start.len() - 1] as usize;
+        out.records = vec![GpuLink::default(); total];
+        for (l, &shape) in sys.links.links.iter().zip(&per_link) {
+            let image = sender_image(sys, l.sender) as usize;
+            for &c in &shapes[shape as usize] {
+                let k = image * keys + height(c) as usize;
+                out.records[start[k] as usize] =
+                    GpuLink::new(l.receiver, l.sender, c, l.form_factor as f32);
+                start[k] += 1;
+                let r = combos[c as usize];
+                out.fragments += ((r.rect >> 16 & 0xff) * (r.rect >> 24)) as u64;
+                out.blended += (r.mask[0].count_ones() + r.mask[1].count_ones()) as u64;
+            }
         }
-        let mut buckets: Vec<(u32, u32, u32, u32)> = Vec::new();
-        let links: Vec<GpuLink> = order
-            .iter()
-            .enumerate()
-            .map(|(k, &i)| {
-                let l = &sys.links.links[i as usize];
-                let (combo, count) = (per_link[i as usize].0, per_link[i as usize].1 & 0xff);
-                let source = key[i as usize] >> 8;
-                match buckets.last_mut() {
-                    Some(b) if b.0 == source && b.1 == count => b.3 += 1,
-                    _ => buckets.push((source, count, k as u32, 1)),
-                }
-                GpuLink::new(l.receiver, l.sender, combo, l.form_factor as f32)
-            })
-            .collect();
-        buckets.retain(|b| b.1 > 0);
-        // The global pass pulls link `k` of a bucket by vertex index `2·runs·k + …`.
-        if let Some(b) = buckets
-            .iter()
-            .find(|b| 2 * b.1 as u64 * (b.2 as u64 + b.3 as u64) > u32::MAX as u64)
-        {
+        // After the fill, start[k] is the end of bucket k.
+        let mut first = 0u32;
+        for (k, &end) in start[..3 * keys].iter().enumerate() {
+            if end > first {
+                out.buckets
+                    .push(((k / keys) as u32, (k % keys) as u32, first, end - first));
+            }
+            first = first.max(end);
+        }
+        out.lines = total as u64;
+        // The global pass pulls record `k` by vertex index `2k + …`.
+        if 2 * total as u64 > u32::MAX as u64 {
             return Err(Error::Invalid(format!(
-                "{} links of {} receiver-bin runs each exceed the global pass's 32-bit vertex index",
-                b.2 + b.3,
-                b.1
+                "{total} global-pass lines exceed its 32-bit vertex index"
             )));
         }
-        Ok((links, buckets, combos, runs, fragments, lines))
+        out.combos = combos;
+        Ok(out)
     }
+}
+
+/// What [`DrawData::links`] builds.
+#[derive(Default)]
+struct GlobalLines {
+    records: Vec<GpuLink>,
+    buckets: Vec<(u32, u32, u32, u32)>,
+    combos: Vec<GpuCombo>,
+    fragments: u64,
+    blended: u64,
+    lines: u64,
 }
 
 #[cfg(test)]
@@ -516,5 +640,83 @@ mod tests {
             *v = DVec3::splat(i as f64);
         }
         assert_eq!(l.to_table(&l.from_table(&t)), t);
+    }
+
+    #[test]
+    fn tiles_hold_every_bin_once_and_round_trip() {
+        let l = TableLayout::with_column_height(10, 32, 4096, 9)
+            .unwrap()
+            .with_grid(4, 4096)
+            .unwrap();
+        // 9 rows per column block hold two 4-row tiles; 10 nodes need 5 columns of 8 bins.
+        assert_eq!(
+            (l.tile_nodes, l.tile_columns, l.tile_extent()),
+            (2, 5, (40, 8))
+        );
+        assert_eq!(l.tile_texel(3, 9), (8 + 1, 4 + 1));
+        let (w, h) = l.tile_extent();
+        let mut seen = vec![false; (w * h) as usize];
+        let mut t = Table::zeros(10, 32);
+        let mut rgba = vec![[0.0f32; 4]; (w * h) as usize];
+        for r in 0..10 {
+            for j in 0..32 {
+                let (x, y) = l.tile_texel(r, j);
+                assert!(x < w && y < h);
+                let i = (y * w + x) as usize;
+                assert!(!seen[i], "texel ({x}, {y}) holds two bins");
+                seen[i] = true;
+                let v = (r * 32 + j) as f32;
+                rgba[i] = [v, v, v, 0.0];
+                t.data[(r * 32 + j) as usize] = DVec3::splat(v as f64);
+            }
+        }
+        assert_eq!(l.tiles_to_table(&rgba), t);
+        // Blocks of 7 rows hold one 4-row tile: 28 tiles of 8 columns pass 128 texels.
+        assert!(TableLayout::with_column_height(28, 32, 128, 7)
+            .unwrap()
+            .with_grid(4, 128)
+            .is_err());
+    }
+
+    #[test]
+    fn rectangles_cover_each_kept_bin_exactly_once() {
+        let (nu, nv) = (8u32, 16u32);
+        for center in [0u32, 7, 45, 64, 100, 127] {
+            let (cu, cv) = ((center % nu) as i32, (center / nu) as i32);
+            // A round footprint, with its far side across the seam (the opposite edge).
+            let row: Vec<(u32, f32)> = (0..nu * nv)
+                .filter(|b| {
+                    let (u, v) = ((b % nu) as i32, (b / nu) as i32);
+                    (u - cu).pow(2) + (v - cv).pow(2) <= 6 || (v == nv as i32 - 1 - cv && u == cu)
+                })
+                .map(|b| (b, if b == center + 1 { 0.0 } else { 0.5 }))
+                .collect();
+            for keep_all in [true, false] {
+                let keep = |j: u32| keep_all || j % 3 != 0;
+                for max_height in [1, 3, 16] {
+                    let rects = bin_rects(nu, nv, &row, keep, max_height);
+                    let mut count = vec![0; (nu * nv) as usize];
+                    for r in &rects {
+                        assert!(r.height <= max_height && r.width * r.height <= MAX_RECT_BINS);
+                        assert!(r.u0 + r.width <= nu && r.v0 + r.height <= nv);
+                        assert!(r.mask < 1u64 << (r.width * r.height) || r.width * r.height == 64);
+                        for bit in 0..r.width * r.height {
+                            if r.mask >> bit & 1 == 1 {
+                                let (du, dv) = (bit % r.width, bit / r.width);
+                                count[((r.v0 + dv) * nu + r.u0 + du) as usize] += 1;
+                            }
+                        }
+                    }
+                    for b in 0..nu * nv {
+                        let want = row.iter().any(|e| e.0 == b && e.1 != 0.0) && keep(b);
+                        assert_eq!(count[b as usize], want as i32, "bin {b} of {center}");
+                    }
+                    if max_height == 16 && keep_all {
+                        // The footprint and its piece across the seam.
+                        assert!(rects.len() <= 2, "{rects:?}");
+                    }
+                }
+            }
+        }
     }
 }

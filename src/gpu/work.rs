@@ -21,9 +21,10 @@ pub struct PassWork {
 /// The work of one propagation (global, push, local, pull) and of the convergence reduction.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
 pub struct Work {
-    /// Global: one line per run of receiver bins of every link, all fragments blended.
+    /// Global: one (wide) line per rectangle of receiver bins of every link; the bins without
+    /// filter weight or that the receiver does not read are discarded, not blended.
     pub global: PassWork,
-    /// Push: one line per node (nodes × bins fragments), odd depths blended.
+    /// Push: one quad per node over its tile (nodes × bins fragments), odd depths blended.
     pub push: PassWork,
     /// Local: the irradiance texels and every leaf texel.
     pub local: PassWork,
@@ -47,13 +48,13 @@ impl Work {
         Self {
             global: PassWork {
                 fragments: d.global_fragments,
-                blended: d.global_fragments,
+                blended: d.global_blended,
                 primitives: d.global_lines,
             },
             push: PassWork {
                 fragments: nodes * m,
                 blended: odd * m,
-                primitives: nodes,
+                primitives: 2 * nodes,
             },
             local: PassWork {
                 fragments: leaves * (m + 1),
@@ -130,6 +131,7 @@ mod tests {
             ash::vk::Format::R16G16B16A16_SFLOAT,
             u32::MAX,
             16384,
+            255,
         )
         .unwrap();
         let w = Work::of(&sys, &plan);
@@ -137,8 +139,8 @@ mod tests {
         assert_eq!(w.push.fragments, n * 32);
         assert_eq!(w.pull.fragments, (n - l) * 32);
         assert_eq!(w.pull.primitives, n - l);
-        // Every link draws at most its filter's support, in at least one line when it reaches
-        // a bin its receiver reads.
+        // Every link blends at most its filter's support, in at least one line when it reaches
+        // a bin its receiver reads; each line rasterizes its rectangle.
         let support: u64 = sys
             .links
             .links
@@ -150,9 +152,10 @@ mod tests {
                     .len() as u64
             })
             .sum();
-        assert!(w.global.fragments <= support && w.global.fragments > 0);
-        assert!(w.global.primitives >= plan.draw.links.len() as u64);
-        assert_eq!(w.global.blended, w.global.fragments);
+        assert!(w.global.blended <= support && w.global.blended > 0);
+        assert_eq!(w.global.primitives, plan.draw.links.len() as u64);
+        assert!(w.global.primitives >= sys.links.links.len() as u64);
+        assert!(w.global.fragments >= w.global.blended);
         // The glossy spheres' truncated lobes: fewer terms than every front × every incident bin.
         assert!(w.glossy_terms > 0 && w.glossy_terms < l * 32 * 16);
         assert_eq!(w.times(5).global.fragments, 5 * w.global.fragments);

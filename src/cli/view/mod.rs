@@ -240,6 +240,7 @@ impl Viewer {
             queue: host.queue,
             queue_family: host.queue_family,
             rectangular_lines: host.rectangular_lines,
+            wide_lines: host.wide_lines,
             debug_utils: host.inst.debug_utils,
         })?;
         let diagonal = {

@@ -80,6 +80,8 @@ pub struct Host {
     pub swapchain_fn: ash::khr::swapchain::Device,
     /// Whether VK_EXT_line_rasterization with rectangular lines is on.
     pub rectangular_lines: bool,
+    /// Whether the core `wideLines` feature is enabled.
+    pub wide_lines: bool,
     /// Instance and surface (dropped after the device).
     pub inst: Instance,
 }
@@ -119,6 +121,7 @@ impl Host {
             f2 = f2.push_next(&mut line_feat);
         }
         unsafe { i.get_physical_device_features2(physical_device, &mut f2) };
+        let wide = f2.features.wide_lines == vk::TRUE;
         if f2.features.independent_blend != vk::TRUE
             || f13.dynamic_rendering != vk::TRUE
             || f13.synchronization2 != vk::TRUE
@@ -139,7 +142,9 @@ impl Host {
         let queues = [vk::DeviceQueueCreateInfo::default()
             .queue_family_index(queue_family)
             .queue_priorities(&prio)];
-        let core = vk::PhysicalDeviceFeatures::default().independent_blend(true);
+        let core = vk::PhysicalDeviceFeatures::default()
+            .independent_blend(true)
+            .wide_lines(wide);
         let mut info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queues)
             .enabled_features(&core)
@@ -159,6 +164,7 @@ impl Host {
             queue_family,
             swapchain_fn,
             rectangular_lines: rect,
+            wide_lines: wide,
             inst,
         })
     }

@@ -38,7 +38,7 @@ fn push_constants_match_glsl() {
             "omega",
             "flags",
             "sender",
-            "runs",
+            "pad",
             "environment"
         ]
     );
@@ -58,6 +58,7 @@ fn specialization_ids_match_glsl() {
         ("AR_SPEC_BINS", spec::BINS),
         ("AR_SPEC_GRID_ROWS", spec::GRID_ROWS),
         ("AR_SPEC_ROWS_PER_COLUMN", spec::ROWS_PER_COLUMN),
+        ("AR_SPEC_TILE_NODES", spec::TILE_NODES),
     ] {
         assert!(
             COMMON.contains(&format!("#define {name} {id}\n")),
@@ -66,7 +67,8 @@ fn specialization_ids_match_glsl() {
     }
     let t = crate::gpu::tables::TableLayout::with_column_height(100, 32, 4096, 40)
         .unwrap()
-        .with_grid(4);
+        .with_grid(4, 4096)
+        .unwrap();
     let v = spec::solver_values(&crate::plan::Features::ALL, mode::REFLECT, true, &t);
     assert_eq!(
         v[..spec::COUNT],
@@ -76,9 +78,10 @@ fn specialization_ids_match_glsl() {
         [
             v[spec::BINS as usize],
             v[spec::GRID_ROWS as usize],
-            v[spec::ROWS_PER_COLUMN as usize]
+            v[spec::ROWS_PER_COLUMN as usize],
+            v[spec::TILE_NODES as usize]
         ],
-        [32, 4, 40]
+        [32, 4, 40, 10]
     );
 }
 
@@ -86,7 +89,7 @@ fn specialization_ids_match_glsl() {
 fn vertex_and_buffer_records() {
     assert_eq!(size_of::<GpuLink>(), 12);
     assert_eq!(offset_of!(GpuLink, form_factor), 8);
-    assert_eq!(size_of::<GpuCombo>(), 8);
+    assert_eq!(size_of::<GpuCombo>(), 16);
     assert_eq!(size_of::<QuadInstance>(), 12);
     assert_eq!(size_of::<RowPair>(), 8);
     for (r, s, c) in [
@@ -179,7 +182,6 @@ fn bindings_match_glsl() {
         ("LOBE_NORM", binding::LOBE_NORM),
         ("CLUSTER_EX_ODD", binding::CLUSTER_EX_ODD),
         ("COMBOS", binding::COMBOS),
-        ("RUNS", binding::RUNS),
         ("LOBE_BINS", binding::LOBE_BINS),
         ("LINKS", binding::LINKS),
     ];

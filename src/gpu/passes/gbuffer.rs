@@ -52,6 +52,7 @@ pub fn pipeline(
             (vk::Format::R32G32B32_SFLOAT, 20),
         ],
         depth: true,
+        wide_lines: false,
         ..frame_desc(
             "gbuffer",
             "gbuffer.vert",

@@ -1,10 +1,13 @@
-//! Global pass (eq. 16, §4.2): every link is drawn as line primitives — one per run of receiver
-//! bins its cone filter reaches and the receiver reads — into the receiver's row of L_in; the
-//! sender's I_ex times the form factor is fetched once per line, the fragment shader weights it
-//! by the filter table, and additive blending sums all links of a receiver. Links are drawn in
-//! one draw per sender image and run count (`DrawData::link_buckets`), so the vertex shader
-//! fetches I_ex from one image instead of summing the leaves' and both cluster parities'. The
-//! vertex shader pulls its link record by vertex index (no vertex input, no instances).
+//! Global pass (eq. 16, §4.2): every link is drawn as line primitives into the receiver's tile
+//! of L_in, one per rectangle of the bins' grid that its cone filter's footprint covers
+//! (`tables::bin_rects`: usually one, more where the octahedral map's seam cuts it), each line
+//! as wide as its rectangle is tall. The sender's I_ex times the form factor is fetched once
+//! per line, the fragment shader weights it by the filter table (discarding the rectangle's
+//! bins without weight or that a leaf receiver never reads), and additive blending sums all
+//! links of a receiver. Lines are drawn in one draw per sender image and line width
+//! (`DrawData::link_buckets`), so the vertex shader fetches I_ex from one image instead of
+//! summing the leaves' and both cluster parities'. It pulls its record by vertex index (no
+//! vertex input, no instances).
 
 use super::{begin_rendering, end_rendering, Load, Pass, PipelineSpec};
 use crate::error::Result;
@@ -29,6 +32,7 @@ pub fn pipeline(spec: &PipelineSpec<'_>) -> Result<Owned<vk::Pipeline>> {
         specialization: &constants,
         per_vertex: true,
         depth: false,
+        wide_lines: true,
     };
     create(spec.ctx, spec.layout, &desc)
 }
@@ -53,13 +57,16 @@ pub fn record(p: &Pass<'_>, res: &mut Resources, cur: usize) {
         ],
     );
     begin_rendering(p.ctx, p.cmd, &[(&im.l_in, Load::Clear)]);
-    for &(sender, runs, first, count) in &res.plan.draw.link_buckets {
-        p.bind_global(&p.pipes.global, im.l_in.extent, sender, runs);
-        // Link k is pulled by vertex index 2·runs·k + … (fits 32 bits: DrawData checks).
+    let mut bound = None;
+    for &(sender, width, first, count) in &res.plan.draw.link_buckets {
+        if bound != Some(sender) {
+            p.bind_global(&p.pipes.global, im.l_in.extent, sender);
+            bound = Some(sender);
+        }
+        // Record k is pulled by vertex index 2k + … (fits 32 bits: DrawData checks).
         unsafe {
-            p.ctx
-                .device
-                .cmd_draw(p.cmd, 2 * runs * count, 1, 2 * runs * first, 0);
+            p.ctx.device.cmd_set_line_width(p.cmd, width as f32);
+            p.ctx.device.cmd_draw(p.cmd, 2 * count, 1, 2 * first, 0);
         }
     }
     end_rendering(p.ctx, p.cmd);

@@ -85,6 +85,7 @@ pub fn frame_desc<'a>(
         specialization,
         per_vertex: true,
         depth: false,
+        wide_lines: false,
     }
 }
 
@@ -287,19 +288,13 @@ impl Pass<'_> {
     /// Binds `pipeline`, the set and the push constants for a target of `extent` with rows
     /// `quad_width` texels wide.
     pub fn bind(&self, pipeline: &Owned<vk::Pipeline>, extent: vk::Extent2D, quad_width: u32) {
-        self.bind_with(pipeline, extent, quad_width, 0, 0);
+        self.bind_with(pipeline, extent, quad_width, 0);
     }
 
-    /// As [`Pass::bind`] for one global draw: its senders' image and lines per link
-    /// ([`PassConstants::sender`], [`PassConstants::runs`]).
-    pub fn bind_global(
-        &self,
-        pipeline: &Owned<vk::Pipeline>,
-        extent: vk::Extent2D,
-        sender: u32,
-        runs: u32,
-    ) {
-        self.bind_with(pipeline, extent, 0, sender, runs);
+    /// As [`Pass::bind`] for the global draws of senders in one image
+    /// ([`PassConstants::sender`]).
+    pub fn bind_global(&self, pipeline: &Owned<vk::Pipeline>, extent: vk::Extent2D, sender: u32) {
+        self.bind_with(pipeline, extent, 0, sender);
     }
 
     fn bind_with(
@@ -308,14 +303,12 @@ impl Pass<'_> {
         extent: vk::Extent2D,
         quad_width: u32,
         sender: u32,
-        runs: u32,
     ) {
         let c = PassConstants {
             target_width: extent.width,
             target_height: extent.height,
             quad_width,
             sender,
-            runs,
             ..self.constants
         };
         bind_with_constants(

@@ -1,5 +1,6 @@
-//! Push (§4.2), top-down, one draw per depth: every node's L_push is its parent's plus its own
-//! gathered L_in, so O(nodes × bins) fragments. Even depths are written into the L_push image
+//! Push (§4.2), top-down, one draw per depth of one quad per node over its tile: every node's
+//! L_push is its parent's plus its own gathered L_in, so O(nodes × bins) fragments. Even depths
+//! are written into the L_push image
 //! (`push_even.frag`, reading the L_in image); odd depths are added onto their own L_in rows
 //! (`push_odd.frag`, reading the L_push image), so no pass reads the image it draws into and
 //! no extra table is needed. The local pass reads a leaf's incident light from the image of its
@@ -33,10 +34,26 @@ pub fn quad_desc<'a>(
         specialization,
         per_vertex: false,
         depth: false,
+        wide_lines: false,
     }
 }
 
-/// One line per node across its row (push and pull), with the row it reads besides its own.
+/// One quad per node over its tile of an incident table (push), with the row it reads besides
+/// its own.
+pub fn tile_desc<'a>(
+    name: &'a str,
+    frag: &'a str,
+    targets: &'a [Target],
+    specialization: &'a [u32],
+) -> PipelineDesc<'a> {
+    PipelineDesc {
+        vert: "tile.vert",
+        topology: vk::PrimitiveTopology::TRIANGLE_STRIP,
+        ..row_desc(name, frag, targets, specialization)
+    }
+}
+
+/// One line per node across its row (pull), with the row it reads besides its own.
 pub fn row_desc<'a>(
     name: &'a str,
     frag: &'a str,
@@ -54,6 +71,7 @@ pub fn row_desc<'a>(
         specialization,
         per_vertex: false,
         depth: false,
+        wide_lines: false,
     }
 }
 
@@ -69,12 +87,12 @@ pub fn pipelines(spec: &PipelineSpec<'_>) -> Result<[Owned<vk::Pipeline>; 2]> {
         create(
             spec.ctx,
             spec.layout,
-            &row_desc("push (even depths)", "push_even.frag", &put, &constants),
+            &tile_desc("push (even depths)", "push_even.frag", &put, &constants),
         )?,
         create(
             spec.ctx,
             spec.layout,
-            &row_desc("push (odd depths)", "push_odd.frag", &add, &constants),
+            &tile_desc("push (odd depths)", "push_odd.frag", &add, &constants),
         )?,
     ])
 }
@@ -102,7 +120,7 @@ pub fn record(p: &Pass<'_>, res: &mut Resources) {
         p.bind(&p.pipes.push[odd as usize], target.extent, bins);
         p.draw_range(
             res.buffers.push.raw,
-            2,
+            4,
             range.start,
             range.end - range.start,
         );

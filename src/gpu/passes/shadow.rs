@@ -32,6 +32,7 @@ pub fn pipeline(
         stride: std::mem::size_of::<CornerVertex>() as u32,
         attributes: &[POSITION],
         depth: true,
+        wide_lines: false,
         ..frame_desc(
             "shadow",
             "shadow.vert",

@@ -20,7 +20,7 @@ use gpu_allocator::MemoryLocation;
 /// What one follow uploaded.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct FollowUploads {
-    /// Bytes staged and copied (link records, combos, runs, attributes, lobe factors).
+    /// Bytes staged and copied (link records, combos, attributes, lobe factors).
     pub bytes: u64,
     /// Buffers made anew because the moved system's records no longer fit.
     pub grown: usize,
@@ -90,10 +90,15 @@ impl GpuSolver {
         if sys.rows() as u32 != layout.rows || sys.bins.count as u32 != layout.bins {
             return Ok(None);
         }
-        let draw = DrawData::new(sys, &layout, self.features.glossy_everywhere)?;
         let old = self.res.draw();
+        let draw = DrawData::new(
+            sys,
+            &layout,
+            self.features.glossy_everywhere,
+            old.max_line_width,
+        )?;
         let same_shape = draw.class_layer == old.class_layer
-            && draw.links.len() == old.links.len()
+            && draw.link_count == old.link_count
             && draw.push == old.push
             && draw.pull == old.pull
             && draw.diffuse_quads == old.diffuse_quads
@@ -118,13 +123,14 @@ impl GpuSolver {
             as_bytes(&draw.links),
         )? as usize;
         let combos = pack::padded(draw.combos.clone());
-        let runs = pack::padded(draw.runs.clone());
-        for (buf, desc, bytes) in [
-            (&mut b.combos, &mut d.combos, as_bytes(&combos)),
-            (&mut b.runs, &mut d.runs, as_bytes(&runs)),
-        ] {
-            grown += rewrite(staged, cmd, &ctx, buf, desc, bytes)? as usize;
-        }
+        grown += rewrite(
+            staged,
+            cmd,
+            &ctx,
+            &mut b.combos,
+            &mut d.combos,
+            as_bytes(&combos),
+        )? as usize;
         staged.finish(cmd);
         let (na, lf) = pack::attributes(sys, &layout);
         let f32x4 = vk::Format::R32G32B32A32_SFLOAT;

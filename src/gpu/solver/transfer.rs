@@ -103,8 +103,8 @@ impl GpuSolver {
     /// Reads the pushed incident radiance back (push leaves odd depths' rows in the L_in image).
     pub fn read_l_push(&mut self) -> Result<Table> {
         let layout = *self.res.layout();
-        let even = layout.to_table(&self.read_texels(|im| &mut im.l_push)?);
-        let odd = layout.to_table(&self.read_texels(|im| &mut im.l_in)?);
+        let even = layout.tiles_to_table(&self.read_texels(|im| &mut im.l_push)?);
+        let odd = layout.tiles_to_table(&self.read_texels(|im| &mut im.l_in)?);
         let mut t = even;
         for (r, node) in self.depth_parity.iter().enumerate() {
             if *node {

@@ -292,6 +292,7 @@ impl Shooter {
                 specialization: &[],
                 per_vertex: true,
                 depth: true,
+                wide_lines: false,
             },
         )?;
         let select = pipelines::create_compute(ctx, &layouts.pipeline, "pr_select.comp")?;
