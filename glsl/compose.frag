@@ -18,12 +18,10 @@ const float AR_EDGE_OCCLUDER_MARGIN = 0.01;
 uint sample_hit(ivec2 t, out float dist) {
     vec4 g = texelFetch(gbuf_position, t, 0);
     dist = 0.0;
-    if (g.w < 0.5) {
+    if (ar_gbuf_background(g.w)) {
         return 0u;
     }
-    FrameElement e = elements[uint(g.w + 0.5) - 1u];
-    vec3 ke = materials[e.ids.w].ke.rgb;
-    if (max(max(ke.r, ke.g), ke.b) > 0.0) {
+    if (ar_gbuf_emitter(g.w)) {
         return 1u;
     }
     dist = length(g.xyz - pc.eye.xyz);
@@ -99,11 +97,11 @@ void main() {
         for (int sx = 0; sx < ss; sx++) {
             ivec2 t = px * ss + ivec2(sx, sy);
             vec4 g = texelFetch(gbuf_position, t, 0);
-            if (g.w < 0.5) {
+            if (ar_gbuf_background(g.w)) {
                 rest += pc.environment.rgb;
                 continue;
             }
-            FrameElement e = elements[uint(g.w + 0.5) - 1u];
+            FrameElement e = elements[ar_gbuf_leaf(g.w)];
             vec3 n = e.normal_area.xyz;
             vec3 wo = normalize(pc.eye.xyz - g.xyz);
             if (dot(wo, n) <= 0.0) {

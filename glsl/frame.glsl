@@ -28,6 +28,12 @@ const float AR_SHADOW_SLOPE_BIAS = 1.5;
 const float AR_SHADOW_FILTER_RADIUS = 1.5;
 const uint AR_MODE_VERTEX = 1u;
 
+// The G-buffer's position w (glsl/gbuffer.frag): 0 where nothing was hit, else the leaf slot + 1,
+// negative on an emitting leaf.
+bool ar_gbuf_background(float w) { return abs(w) < 0.5; }
+bool ar_gbuf_emitter(float w) { return w < -0.5; }
+uint ar_gbuf_leaf(float w) { return uint(abs(w) + 0.5) - 1u; }
+
 uint ar_nu() { return pc.sizes.z & 0xFFFFu; }
 uint ar_nv() { return pc.sizes.z >> 16; }
 
@@ -156,13 +162,17 @@ float ar_visibility(Light l, vec3 p, vec3 n, float cosv) {
     // Loops here have constant trip counts, so the compiler unrolls them: llvmpipe caps the
     // iterations of a loop per invocation (65535), which nested loops inside the loop over
     // lights reached at ~900 lights (instant radiosity's VPLs), silently dropping light.
+    // The candidates' records are the same for every pixel (uniform loads); the best one's
+    // dot product is kept, so only the chosen view's record is fetched per pixel.
     uint vi = l.kind_views.y;
     vec3 dir = p - shadow_views[vi].origin.xyz;
+    float best = dot(dir, shadow_views[vi].forward.xyz);
     for (uint k = 1u; k < 6u; k++) {
-        uint i = l.kind_views.y + k;
-        if (k < l.kind_views.z
-            && dot(dir, shadow_views[i].forward.xyz) > dot(dir, shadow_views[vi].forward.xyz)) {
+        uint i = l.kind_views.y + min(k, max(l.kind_views.z, 1u) - 1u);
+        float d = dot(dir, shadow_views[i].forward.xyz);
+        if (k < l.kind_views.z && d > best) {
             vi = i;
+            best = d;
         }
     }
     ShadowView v = shadow_views[vi];

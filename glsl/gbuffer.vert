@@ -14,6 +14,7 @@ layout(location = 0) out vec3 world;
 layout(location = 1) flat out uint leaf_out;
 layout(location = 2) out vec3 vertex_radiance;
 layout(location = 3) out vec3 normal_out;
+layout(location = 4) flat out uint emits;
 
 // Crack-filling input triangle (src/gpu/frame.rs FILLER): drawn 1e-4 of the distance behind,
 // so the elements win wherever they cover.
@@ -23,6 +24,10 @@ void main() {
     world = position;
     normal_out = normal;
     leaf_out = leaf & ~AR_FILLER;
+    // Emitting leaves are marked in the G-buffer (ar_gbuf_emitter): compose's edge test reads
+    // 36 samples per pixel and then needs no element or material record.
+    vec3 ke = materials[elements[leaf_out].ids.w].ke.rgb;
+    emits = max(max(ke.r, ke.g), ke.b) > 0.0 ? 1u : 0u;
     vec3 acc = vec3(0.0);
     float w = 0.0;
     if (AR_VERTEX && vertex != 0xFFFFFFFFu) {

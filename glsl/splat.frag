@@ -8,10 +8,10 @@ layout(location = 0) out vec4 acc;
 
 void main() {
     vec4 g = texelFetch(gbuf_position, ivec2(gl_FragCoord.xy), 0);
-    if (g.w < 0.5) {
+    if (ar_gbuf_background(g.w)) {
         discard;
     }
-    FrameElement h = elements[uint(g.w + 0.5) - 1u];
+    FrameElement h = elements[ar_gbuf_leaf(g.w)];
     FrameElement e = elements[leaf];
     if (h.ids.z == AR_MODE_VERTEX || h.ids.y != e.ids.y) {
         discard;
