@@ -60,7 +60,7 @@ struct Host {
 impl Host {
     /// Instance with the validation layer and a messenger; the first device with a graphics
     /// queue; the features the library needs (Vulkan 1.3 dynamic rendering and
-    /// synchronization2, `independentBlend`; rectangular lines where offered).
+    /// synchronization2, `independentBlend`; rectangular and wide lines where offered).
     fn new() -> Res<Self> {
         let entry = unsafe { ash::Entry::load()? };
         let app = vk::ApplicationInfo::default().api_version(vk::API_VERSION_1_3);

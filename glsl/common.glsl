@@ -211,7 +211,7 @@ vec4 ar_clip(vec2 p) {
 }
 
 // One end of a line along `row` of a table at the left edge of the texel at `position`: a line
-// from position `lo` to `hi` covers exactly the texels [lo, hi) of the row (every line pass).
+// from position `lo` to `hi` covers exactly the texels [lo, hi) of the row (pull).
 vec4 ar_line_end(uint row, uint position) {
     ivec2 t = ar_texel(row, 0u);
     return ar_clip(vec2(float(t.x) + float(position) + pc.line_offset, float(t.y) + 0.5));

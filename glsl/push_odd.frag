@@ -1,6 +1,6 @@
 #version 450
 // Push at an odd depth: the parent's pushed value (even depth, in the L_push image) added to the
-// node's own row of the L_in image by additive blending, which then holds L_push(node). At a leaf
+// node's own tile of the L_in image by additive blending, which then holds L_push(node). At a leaf
 // only on its front (push.glsl).
 #include "push.glsl"
 

@@ -1,9 +1,9 @@
 #version 450
-// Quads over whole rows [first, end) of one column block (push and local passes), drawn as a
+// Quads over whole rows [first, end) of one column block (local pass), drawn as a
 // 4-vertex triangle strip per instance.
 #include "common.glsl"
 
-layout(location = 0) in uvec3 quad;   // source row, first row, end row
+layout(location = 0) in uvec3 quad;   // unused, first row, end row
 layout(location = 0) flat out uint source_row;
 
 void main() {

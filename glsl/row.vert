@@ -1,5 +1,5 @@
 #version 450
-// One line across all bins of a row (push and pull, one line per node), passing the other row
+// One line across all bins of a row (pull, one line per node), passing the other row
 // the fragment shader reads.
 #include "common.glsl"
 

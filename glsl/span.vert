@@ -1,6 +1,6 @@
 #version 450
-// Diagnostics: one line per record over bins [lo, hi) of a row, with the endpoints every line
-// pass uses (ar_line_end), so the coverage check tests the global pass's rasterization.
+// Diagnostics: one line per record over bins [lo, hi) of a row, with the endpoints the pull pass
+// uses (ar_line_end), so the coverage check tests its rasterization.
 #include "common.glsl"
 
 layout(location = 0) in uvec2 span;   // row, lo | hi << 16

@@ -14,7 +14,7 @@ use crate::error::Result;
 use ash::vk;
 use std::sync::Arc;
 
-/// Draws one line per `(row, lo, hi)` over bins `[lo, hi)` with the line endpoints every line
+/// Draws one line per `(row, lo, hi)` over bins `[lo, hi)` with the line endpoints the pull
 /// pass uses (`ar_line_end`), a fragment shader that adds 1, and returns the hit count of every
 /// texel (row-major over the `layout.width() × layout.rows_per_column` image).
 pub fn line_coverage(

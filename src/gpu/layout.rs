@@ -125,8 +125,8 @@ impl BinRect {
     }
 }
 
-/// A row and a second row the pass reads (push: the parent; pull: the right child, the left
-/// being the next row), drawn as one line across the first row.
+/// A row and a second row the pass reads (push: the parent, drawn as a quad over the row's
+/// tile; pull: the right child, the left being the next row, drawn as one line across the row).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct RowPair {
@@ -136,12 +136,12 @@ pub struct RowPair {
     pub other: u32,
 }
 
-/// A quad covering whole rows `[first, end)` of one column block; `source` is the row the push
-/// pass reads (unused by the local pass).
+/// A quad covering whole rows `[first, end)` of one column block (the local pass); `source` is
+/// unused.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct QuadInstance {
-    /// Row read by the fragment shader (push).
+    /// Unused (zero).
     pub source: u32,
     /// First covered row.
     pub first: u32,
@@ -357,7 +357,7 @@ pub mod frame_binding {
     pub const SHADOW_VIEWS: u32 = 7;
     /// Shadow maps, views stacked vertically (sampled R32F).
     pub const SHADOW_MAP: u32 = 8;
-    /// G-buffer: position (xyz), leaf slot + 1 as bits (w); 0 = background.
+    /// G-buffer: position (xyz), leaf slot + 1 (w, negative on an emitting leaf); 0 = background.
     pub const GBUF_POSITION: u32 = 9;
     /// G-buffer: vertex-interpolated indirect radiance.
     pub const GBUF_VERTEX: u32 = 10;

@@ -79,7 +79,7 @@ resource_set! {
         pub links,
         /// What lines share: central bin, filter layer, receiver bin rectangle (global).
         pub combos,
-        /// Push lines, by depth.
+        /// Push quads (one per node tile), by depth.
         pub push,
         /// Diffuse leaf runs.
         pub diffuse_quads,
@@ -203,7 +203,7 @@ impl SolverBuffers<BufferDesc> {
                 sb,
                 Purpose::Links,
             ),
-            push: rows("push lines", &draw.push),
+            push: rows("push quads", &draw.push),
             diffuse_quads: quads("local quads (diffuse)", &draw.diffuse_quads),
             glossy_quads: quads("local quads (glossy)", &draw.glossy_quads),
             leaf_quads: quads("local quads (irradiance)", &draw.leaf_quads),

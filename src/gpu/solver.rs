@@ -613,9 +613,9 @@ impl GpuSolver {
         self.work
     }
 
-    /// Links drawn by the global pass.
+    /// Links drawn by the global pass (each as one or more line records).
     pub fn link_count(&self) -> usize {
-        self.res.draw().links.len()
+        self.res.draw().link_count
     }
 }
 

@@ -311,6 +311,8 @@ pub fn bin_rects(
     keep: impl Fn(u32) -> bool,
     max_height: u32,
 ) -> Vec<BinRect> {
+    // A one-row band must fit the 64-bit mask: grids have nu ≤ 64 (bins::MAX_BINS).
+    debug_assert!(nu <= MAX_RECT_BINS, "{nu} grid columns");
     let m = (nu * nv) as usize;
     let mut on = vec![false; m];
     for &(j, w) in row {

@@ -1,7 +1,8 @@
 //! Global pass (eq. 16): every link adds `F · I_ex(sender, sender_bin)` to the receiver's
 //! incident radiance, spread over bins by its cone class's table (every link is filtered), in
 //! the bins the receiver reads ([`System::reads`]: a leaf only on the sides the link reaches). Parallel
-//! over receivers. The GPU draws exactly these bins, as runs of consecutive texels.
+//! over receivers. The GPU blends exactly these bins (wide lines over rectangles of the bins' grid, the
+//! rest of each rectangle discarded).
 
 use super::Table;
 use crate::system::System;

@@ -1,7 +1,7 @@
 //! The viewer's own Vulkan instance and device (the library is embedded in them through
 //! `Context::from_host`): the instance has the window system's surface extensions, the device
 //! the swapchain, plus what the library needs (Vulkan 1.3 dynamic rendering and
-//! synchronization2, `independentBlend`, rectangular lines where offered).
+//! synchronization2, `independentBlend`, rectangular and wide lines where offered).
 
 use anyhow::{anyhow, bail, Context as _, Result};
 use ash::vk;

@@ -104,7 +104,7 @@ pub enum Load {
 pub struct SolverPipelines {
     /// Global lines, additive into L_in.
     pub global: Owned<vk::Pipeline>,
-    /// Push lines: even depths into L_push, odd depths added onto L_in.
+    /// Push quads (one per node tile): even depths into L_push, odd depths added onto L_in.
     pub push: [Owned<vk::Pipeline>; 2],
     /// Irradiance quads (one texel per row).
     pub irradiance: Owned<vk::Pipeline>,

@@ -1,7 +1,7 @@
 //! Push (§4.2), top-down, one draw per depth of one quad per node over its tile: every node's
 //! L_push is its parent's plus its own gathered L_in, so O(nodes × bins) fragments. Even depths
 //! are written into the L_push image
-//! (`push_even.frag`, reading the L_in image); odd depths are added onto their own L_in rows
+//! (`push_even.frag`, reading the L_in image); odd depths are added onto their own L_in tiles
 //! (`push_odd.frag`, reading the L_push image), so no pass reads the image it draws into and
 //! no extra table is needed. The local pass reads a leaf's incident light from the image of its
 //! depth's parity.

@@ -5,7 +5,7 @@
 //! factors are packed again and uploaded, recorded into a command buffer.
 
 use super::GpuSolver;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::gpu::layout::as_bytes;
 use crate::gpu::memory::{Buffer, BufferDesc};
 use crate::gpu::pack::{self, encode};
@@ -27,7 +27,8 @@ pub struct FollowUploads {
 }
 
 /// Writes `bytes` into `buf` through `staged`, making the buffer anew (and `desc` with it)
-/// where it is too small; returns whether it did.
+/// where it is too small; returns whether it did. A storage buffer may not outgrow
+/// `maxStorageBufferRange` (the shaders read it whole), as [`GpuSolver::new`] checks.
 fn rewrite(
     staged: &mut Staged,
     cmd: vk::CommandBuffer,
@@ -37,6 +38,17 @@ fn rewrite(
     bytes: &[u8],
 ) -> Result<bool> {
     let grow = bytes.len() as u64 > buf.size;
+    let range = ctx.info.max_storage_buffer_range as u64;
+    if desc.usage.contains(vk::BufferUsageFlags::STORAGE_BUFFER) && bytes.len() as u64 > range {
+        return Err(Error::TooLarge {
+            what: format!(
+                "GPU buffer '{}' after a move (maxStorageBufferRange; solver.element_size, solver.oracle)",
+                desc.name
+            ),
+            needed_bytes: bytes.len() as u64,
+            limit_bytes: range,
+        });
+    }
     if grow {
         desc.size = bytes.len() as u64;
         *buf = Buffer::new(
