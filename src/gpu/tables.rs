@@ -70,8 +70,9 @@ impl TableLayout {
         })
     }
 
-    /// The same layout with the incident tables' tiles `nu × nv` (the bins' grid): `rows_per_column / nv` nodes per column block, so the
-    /// tiled images are about as large as the others.
+    /// The same layout with the incident tables' tiles `nu × nv` (the bins' grid):
+    /// `rows_per_column / nv` nodes per column block, so the tiled images are about as large as
+    /// the others.
     pub fn with_grid(self, nv: u32, max_dim: u32) -> Result<Self> {
         debug_assert!(nv >= 1 && self.bins % nv == 0);
         let tile_nodes = (self.rows_per_column / nv).max(1);
@@ -126,12 +127,22 @@ impl TableLayout {
     /// Converts texels of an incident table read back (row-major over [`Self::tile_extent`])
     /// into a [`Table`].
     pub fn tiles_to_table(&self, rgba: &[[f32; 4]]) -> Table {
+        self.gather(rgba, self.tile_extent().0, |r, j| self.tile_texel(r, j))
+    }
+
+    /// The [`Table`] of texels `rgba` (row-major, `width` per image row) where `(row, bin)`
+    /// lives at `texel(row, bin)`.
+    fn gather(
+        &self,
+        rgba: &[[f32; 4]],
+        width: u32,
+        texel: impl Fn(u32, u32) -> (u32, u32),
+    ) -> Table {
         let mut t = Table::zeros(self.rows as usize, self.bins as usize);
-        let w = self.tile_extent().0 as usize;
         for r in 0..self.rows {
             for j in 0..self.bins {
-                let (x, y) = self.tile_texel(r, j);
-                let v = rgba[y as usize * w + x as usize];
+                let (x, y) = texel(r, j);
+                let v = rgba[(y * width + x) as usize];
                 t.data[(r * self.bins + j) as usize] =
                     DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64);
             }
@@ -173,17 +184,7 @@ impl TableLayout {
 
     /// Converts texels read back (`rgba` per texel, row-major over the image) into a [`Table`].
     pub fn to_table(&self, rgba: &[[f32; 4]]) -> Table {
-        let mut t = Table::zeros(self.rows as usize, self.bins as usize);
-        let w = self.width() as usize;
-        for r in 0..self.rows {
-            for j in 0..self.bins {
-                let (x, y) = self.texel(r, j);
-                let v = rgba[y as usize * w + x as usize];
-                t.data[(r * self.bins + j) as usize] =
-                    DVec3::new(v[0] as f64, v[1] as f64, v[2] as f64);
-            }
-        }
-        t
+        self.gather(rgba, self.width(), |r, j| self.texel(r, j))
     }
 
     /// Lays a [`Table`] out as RGBA texels.
