@@ -50,19 +50,23 @@ uint ar_front_bin(vec3 dir, vec3 n, float side) {
     return b;
 }
 
-// surfaces.rs display_radiance: I_total in the bin toward the eye, as radiance.
-vec3 ar_display_radiance(uint leaf, vec3 wo) {
-    FrameElement e = elements[leaf];
-    vec3 n = e.normal_area.xyz;
+// surfaces.rs display_radiance: I_total in the bin toward the eye, as radiance, of the leaf
+// with unit normal n, area times cosine normalization `ac` and table row `row`.
+vec3 ar_display_radiance_of(vec3 n, float ac, uint row, vec3 wo) {
     if (dot(wo, n) <= 0.0) {
         return vec3(0.0);
     }
     uint b = ar_front_bin(wo, n, 1.0);
     float cb = dot(bin_centers[b].xyz, n);
     uint m = ar_nu() * ar_nv();
-    uint row = e.ids.x;
     ivec2 t = ivec2((row / pc.sizes.w) * m + b, row % pc.sizes.w);
-    return texelFetch(i_total, t, 0).rgb * pc.eye.w / (e.normal_area.w * e.cos_norm.x * cb);
+    return texelFetch(i_total, t, 0).rgb * pc.eye.w / (ac * cb);
+}
+
+// ar_display_radiance_of the leaf in slot `leaf`.
+vec3 ar_display_radiance(uint leaf, vec3 wo) {
+    FrameElement e = elements[leaf];
+    return ar_display_radiance_of(e.normal_area.xyz, e.normal_area.w * e.cos_norm.x, e.ids.x, wo);
 }
 
 // shading.rs MIN_EYE_COSINE.

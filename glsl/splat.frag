@@ -3,7 +3,9 @@
 #extension GL_GOOGLE_include_directive : require
 #include "frame.glsl"
 
-layout(location = 0) flat in uint leaf;
+layout(location = 0) flat in vec4 center_radius;
+layout(location = 1) flat in vec4 normal_ac;
+layout(location = 2) flat in uvec2 row_surface;
 layout(location = 0) out vec4 acc;
 
 void main() {
@@ -12,11 +14,10 @@ void main() {
         discard;
     }
     FrameElement h = elements[ar_gbuf_leaf(g.w)];
-    FrameElement e = elements[leaf];
-    if (h.ids.z == AR_MODE_VERTEX || h.ids.y != e.ids.y) {
+    if (h.ids.z == AR_MODE_VERTEX || h.ids.y != row_surface.y) {
         discard;
     }
-    float w = ar_splat_weight(length(g.xyz - e.center_radius.xyz), e.center_radius.w);
+    float w = ar_splat_weight(length(g.xyz - center_radius.xyz), center_radius.w);
     if (w <= 0.0) {
         discard;
     }
@@ -29,5 +30,5 @@ void main() {
         vec3 ns = ar_shading_normal(texelFetch(gbuf_normal, ivec2(gl_FragCoord.xy), 0).xyz, n, wo);
         dir = ar_eye_direction(wo, ns, n);
     }
-    acc = vec4(ar_display_radiance(leaf, dir) * w, w);
+    acc = vec4(ar_display_radiance_of(normal_ac.xyz, normal_ac.w, row_surface.x, dir) * w, w);
 }

@@ -5,7 +5,10 @@
 #include "frame.glsl"
 
 layout(location = 0) in uint leaf;
-layout(location = 0) flat out uint leaf_out;
+// The splatted leaf's record, handed to its fragments (one fetch per vertex, not per fragment).
+layout(location = 0) flat out vec4 center_radius;
+layout(location = 1) flat out vec4 normal_ac;   // unit normal, area × cosine normalization
+layout(location = 2) flat out uvec2 row_surface; // table row, flat-surface id
 
 void main() {
     FrameElement e = elements[leaf];
@@ -20,6 +23,8 @@ void main() {
         float a = float(k + corner - 1u) * (AR_PI / 4.0);
         p += r * (cos(a) * t + sin(a) * b);
     }
-    leaf_out = leaf;
+    center_radius = e.center_radius;
+    normal_ac = vec4(n, e.normal_area.w * e.cos_norm.x);
+    row_surface = e.ids.xy;
     gl_Position = pc.view_proj * vec4(p, 1.0);
 }
