@@ -19,10 +19,10 @@ layout(std430, binding = AR_BINDING_COMBOS) readonly buffer Combos { uvec4 combo
 layout(std430, binding = AR_BINDING_LINKS) readonly buffer Links { uint link_words[]; };
 
 layout(location = 0) flat out vec3 sent;     // F · I_ex(sender, bin)
-layout(location = 1) flat out ivec2 corner;  // texel of the rectangle's first bin
-layout(location = 2) flat out ivec2 filter_at; // filter-table texel of that bin
-layout(location = 3) flat out uint width;    // the rectangle's columns (the mask's row stride)
-layout(location = 4) flat out uvec2 mask;    // bit dv·width + du: bin (du, dv) blends
+// Packed to keep the per-line setup small: corner x | y << 16 (texel of the rectangle's first
+// bin), its filter-table column | the rectangle's width << 16, the filter-table row.
+layout(location = 1) flat out uvec3 place;
+layout(location = 2) flat out uvec2 mask;    // bit dv·width + du: bin (du, dv) blends
 
 void main() {
     uint li = uint(gl_VertexIndex) >> 1;
@@ -37,9 +37,8 @@ void main() {
     ivec2 o = ar_in_origin(receiver) + ivec2(r.xy);
     // Drawn as wide as the rectangle is tall (the draw's line width).
     gl_Position = ar_rect_line_end(o, r.zw, (gl_VertexIndex & 1) != 0);
-    corner = o;
-    filter_at = ivec2(r.y * AR_GRID_COLUMNS + r.x, (c.x >> 16) * AR_BINS + bin);
-    width = r.z;
+    place = uvec3(uint(o.x) | uint(o.y) << 16, (r.y * AR_GRID_COLUMNS + r.x) | r.z << 16,
+        (c.x >> 16) * AR_BINS + bin);
     mask = c.zw;
     // Flat outputs come from the first vertex of a line; the second one skips the fetch.
     if ((gl_VertexIndex & 1) == 0) {
