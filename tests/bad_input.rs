@@ -83,6 +83,23 @@ fn degenerate_and_duplicate_faces() {
     write(&d, "m.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
     let p = write(&d, "s.toml", "[[object]]\nmesh = \"m.obj\"\n");
     expect_error(&p, &["m.obj", "degenerate"]);
+    // Zero-area faces among others are dropped with one warning naming the file, the count and
+    // the first line, as other renderers load such files (issue 35).
+    write(
+        &d,
+        "some.obj",
+        &format!("{QUAD}v 0 0 0\nv 1 0 0\nv 2 0 0\nf 5 6 7\nf 7 6 5\n"),
+    );
+    let p = write(&d, "s3.toml", "[[object]]\nmesh = \"some.obj\"\n");
+    let s = load_scene(&p).unwrap();
+    assert_eq!(s.triangle_count(), 2);
+    let zero: Vec<&String> = s.warnings.iter().filter(|w| w.contains("zero-area")).collect();
+    assert_eq!(zero.len(), 1, "{:?}", s.warnings);
+    assert!(
+        zero[0].contains("some.obj") && zero[0].contains("2 degenerate") && zero[0].contains("line "),
+        "{}",
+        zero[0]
+    );
     // Duplicates are dropped with one warning per mesh (issue 18); the reversed winding is a
     // back-to-back twin and stays.
     write(&d, "dup.obj", &format!("{QUAD}f 1 2 3 4\nf 4 3 2 1\n"));

@@ -26,6 +26,10 @@ pub struct ObjectSource<'a> {
     pub transform_field: String,
 }
 
+/// The name of the grey diffuse material of faces without one (`materials.default` overrides
+/// it where the MTL has no material of that name).
+pub const DEFAULT_MATERIAL: &str = "default";
+
 /// Reads object `o`, appending its materials and meshes to `scene`; warnings go to `warned`.
 pub fn load_object(
     scene: &mut Scene,
@@ -44,8 +48,13 @@ pub fn load_object(
     })?;
     let scan = obj::scan_obj(&text, &obj_path)?;
     let (models, mtl) = parse(&scan, &obj_path)?;
+    // Faces without a material get the grey default, which `materials.default` may override.
+    let no_material = models.iter().any(|m| m.mesh.material_id.is_none());
+    let default_override = no_material && !mtl.iter().any(|m| m.name.trim() == DEFAULT_MATERIAL);
     for name in o.materials.keys() {
-        if !mtl.iter().any(|m| m.name.trim() == name) {
+        if !(mtl.iter().any(|m| m.name.trim() == name)
+            || (default_override && name == DEFAULT_MATERIAL))
+        {
             return Err(scene_err(
                 src.scene_path,
                 format!("`object[{i}].materials.{name}`: no material of that name in {shown}"),
@@ -67,7 +76,7 @@ pub fn load_object(
             scan.polylines[0]
         ));
     }
-    if scan.faces_without_usemtl {
+    if scan.faces_without_usemtl && !(default_override && o.materials.contains_key(DEFAULT_MATERIAL)) {
         warned.insert(format!(
             "{shown}: faces without usemtl get a grey diffuse material (Kd 0.5)"
         ));
@@ -90,6 +99,8 @@ pub fn load_object(
     // Every triangle kept so far, by its corners, with its index in the file.
     let mut seen: HashMap<[[u64; 3]; 3], usize> = HashMap::new();
     let (mut duplicates, mut first_duplicate) = (0usize, None);
+    let (mut zero_area, mut first_zero) = (0usize, None);
+    let mut kept = 0usize;
     let mut t_file = 0usize;
     // Normals go by the inverse transpose; a mirroring transform turns the face's winding, and
     // so its front, around, and the shading normals with it.
@@ -114,10 +125,23 @@ pub fn load_object(
                     format!("model '{}': material index {id} out of range", model.name),
                 ))
             }
-            None => *default_mat.get_or_insert_with(|| {
-                scene.materials.push(Material::diffuse("default", 0.5));
-                (scene.materials.len() - 1) as u32
-            }),
+            None => match default_mat {
+                Some(m) => m,
+                None => {
+                    let grey = tobj::Material {
+                        name: DEFAULT_MATERIAL.into(),
+                        diffuse: Some([0.5; 3]),
+                        ..Default::default()
+                    };
+                    let mat = if default_override {
+                        material(&grey, o, i, src.scene_path, &obj_path, warned)?
+                    } else {
+                        Material::diffuse(DEFAULT_MATERIAL, 0.5)
+                    };
+                    scene.materials.push(mat);
+                    *default_mat.insert((scene.materials.len() - 1) as u32)
+                }
+            },
         };
         let mut triangles = Vec::with_capacity(mesh.indices.len() / 3);
         let mut normals: Vec<Option<[DVec3; 3]>> = Vec::with_capacity(mesh.indices.len() / 3);
@@ -137,14 +161,10 @@ pub fn load_object(
             let longest = (b - a).length().max((c - b).length()).max((a - c).length());
             let area2 = (b - a).cross(c - a).length();
             if !(area2 > 1e-9 * longest * longest) {
-                return Err(mesh_err(
-                    &obj_path,
-                    format!(
-                        "{}: face is degenerate (zero area): {:?}",
-                        describe(t),
-                        corners.map(|p| p.to_array())
-                    ),
-                ));
+                // Dropped, as other renderers load such files (issue 35): one warning per mesh.
+                zero_area += 1;
+                first_zero.get_or_insert((t, corners));
+                continue;
             }
             // The same corners in the same cyclic order are the same one-sided surface twice
             // (a whole face repeated, or one of its triangles); reversed winding is the
@@ -183,6 +203,7 @@ pub fn load_object(
             }));
         }
         let n = triangles.len();
+        kept += n;
         // Faces without (usable) `vn` get their face normal; a mesh with none keeps none.
         let normals = if normals.iter().any(Option::is_some) {
             triangles
@@ -220,6 +241,23 @@ pub fn load_object(
     }
     if total == 0 {
         return Err(mesh_err(&obj_path, "mesh has no faces".into()));
+    }
+    if let Some((t, corners)) = first_zero {
+        if kept == 0 {
+            return Err(mesh_err(
+                &obj_path,
+                format!(
+                    "every face is degenerate (zero area; first: {}, corners {:?})",
+                    describe(t),
+                    corners.map(|p| p.to_array())
+                ),
+            ));
+        }
+        warned.insert(format!(
+            "{shown}: {zero_area} degenerate (zero-area) {} dropped (collinear or coincident corners; first: {})",
+            if zero_area == 1 { "triangle" } else { "triangles" },
+            describe(t),
+        ));
     }
     if let Some((t, earlier)) = first_duplicate {
         let earlier = match earlier {
