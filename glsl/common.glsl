@@ -116,20 +116,24 @@ struct EmitterTriangle {
     vec4 ke;
 };
 
+// One face slot (src/frame/surfaces.rs Surfaces): its leaf's display data (center, splat radius,
+// normal, area, row) and the face's own normal (a face cluster's faces differ from its plane).
 struct FrameElement {
     vec4 center_radius;
-    vec4 normal_area;
+    vec4 normal_area;  // the leaf's unit normal and area
     uvec4 ids;         // table row, surface id, mode (0 splat, 1 vertex), material
     vec4 cos_norm;     // x cosine normalization; y 1 with shading normals (OBJ vn), else 0
+    vec4 face_normal;  // xyz the face's unit normal
 };
 
-// A leaf around a shared vertex and its shading normal there (not normalized); scalars keep
-// the record 16 bytes in std430.
+// A slot whose leaf blends at a shared vertex, its shading normal there (not normalized) and its
+// weight (surfaces.rs adjacency_weight); scalars keep the record 20 bytes in std430.
 struct AdjEntry {
     uint leaf;
     float nx;
     float ny;
     float nz;
+    float w;
 };
 #else
 layout(push_constant) uniform PassConstants {

@@ -102,7 +102,7 @@ void main() {
                 continue;
             }
             FrameElement e = elements[ar_gbuf_leaf(g.w)];
-            vec3 n = e.normal_area.xyz;
+            vec3 n = e.face_normal.xyz;
             vec3 wo = normalize(pc.eye.xyz - g.xyz);
             if (dot(wo, n) <= 0.0) {
                 continue;

@@ -1,6 +1,6 @@
 #version 450
 // G-buffer at 2x2 samples per pixel (src/gpu/passes/gbuffer.rs). Vertex-interpolated elements get
-// their corners' values here: the area-weighted display radiance of the elements around the
+// their corners' values here: the weighted display radiance of the leaves listed at the
 // shared vertex, in the bin toward the eye (surfaces.rs vertex_values); the shading normal (OBJ
 // vn) is interpolated by the rasterizer like the position.
 #extension GL_GOOGLE_include_directive : require
@@ -43,8 +43,8 @@ void main() {
                     vec3 ns = ar_shading_normal(vec3(a.nx, a.ny, a.nz), na.xyz, wo);
                     dir = ar_eye_direction(wo, ns, na.xyz);
                 }
-                acc += ar_display_radiance(e, dir) * na.w;
-                w += na.w;
+                acc += ar_display_radiance(e, dir) * a.w;
+                w += a.w;
             }
         }
     }

@@ -26,7 +26,7 @@ void main() {
     vec3 wo = normalize(pc.eye.xyz - g.xyz);
     vec3 dir = wo;
     if (h.cos_norm.y > 0.5) {
-        vec3 n = h.normal_area.xyz;
+        vec3 n = h.face_normal.xyz;
         vec3 ns = ar_shading_normal(texelFetch(gbuf_normal, ivec2(gl_FragCoord.xy), 0).xyz, n, wo);
         dir = ar_eye_direction(wo, ns, n);
     }

@@ -5,23 +5,56 @@ use crate::error::{Error, Result};
 use crate::scene::{Scene, SolverSettings};
 use glam::DVec3;
 
-/// A leaf element of the finite-element discretization.
+/// One input triangle (or a bisected piece of one) of an element.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Face {
+    /// Corners (world space, counter-clockwise seen from the front).
+    pub corners: [DVec3; 3],
+    /// Triangle of the element's mesh the face came from.
+    pub triangle: u32,
+}
+
+impl Face {
+    /// Area-weighted normal: the cross product of two edges, halved (its length is the area).
+    pub fn area_normal(&self) -> DVec3 {
+        let [a, b, c] = self.corners;
+        0.5 * (b - a).cross(c - a)
+    }
+
+    /// Area.
+    pub fn area(&self) -> f64 {
+        self.area_normal().length()
+    }
+
+    /// Unit front normal.
+    pub fn normal(&self) -> DVec3 {
+        self.area_normal().normalize_or_zero()
+    }
+
+    /// Centroid.
+    pub fn center(&self) -> DVec3 {
+        (self.corners[0] + self.corners[1] + self.corners[2]) / 3.0
+    }
+}
+
+/// A leaf element of the finite-element discretization: a piece of one input triangle cut by
+/// bisection, or a face cluster of a dense mesh's small triangles ([`crate::clusters`]), which
+/// the solver treats as one plane through its area-weighted centroid with its area-weighted
+/// mean normal.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Element {
-    /// Triangle corners (world space, counter-clockwise seen from the front).
-    pub corners: [DVec3; 3],
-    /// Centroid: the collocation point.
+    /// The faces (at least one; one for a bisected piece).
+    pub faces: Vec<Face>,
+    /// Area-weighted centroid: the collocation point.
     pub center: DVec3,
-    /// Unit front normal.
+    /// Unit front normal (the faces' area-weighted mean).
     pub normal: DVec3,
-    /// Area.
+    /// Area (of all faces).
     pub area: f64,
     /// Index into the scene's materials.
     pub material: u32,
     /// Mesh the element came from.
     pub mesh: u32,
-    /// Triangle of that mesh the element came from.
-    pub triangle: u32,
     /// Whether light arriving at its back is blocked: false on the surface of a closed solid
     /// seen from outside ([`crate::solids`]).
     pub blocks_back: bool,
@@ -29,19 +62,93 @@ pub struct Element {
 
 impl Element {
     fn new(corners: [DVec3; 3], material: u32, mesh: u32, triangle: u32) -> Self {
-        let [a, b, c] = corners;
-        let cr = (b - a).cross(c - a);
-        let area = 0.5 * cr.length();
-        Self {
-            corners,
-            center: (a + b + c) / 3.0,
-            normal: cr.normalize(),
-            area,
+        Self::from_faces(vec![Face { corners, triangle }], material, mesh)
+    }
+
+    /// The element over `faces` (at least one), its center, normal and area derived from them.
+    pub fn from_faces(faces: Vec<Face>, material: u32, mesh: u32) -> Self {
+        let mut e = Self {
+            faces,
+            center: DVec3::ZERO,
+            normal: DVec3::ZERO,
+            area: 0.0,
             material,
             mesh,
-            triangle,
             blocks_back: true,
+        };
+        e.update_geometry();
+        e
+    }
+
+    /// Recomputes center, normal and area from the faces (after they moved).
+    pub fn update_geometry(&mut self) {
+        if let [f] = self.faces.as_slice() {
+            // One face: exactly the triangle's own centroid, normal and area.
+            let [a, b, c] = f.corners;
+            let cr = (b - a).cross(c - a);
+            self.area = 0.5 * cr.length();
+            self.center = (a + b + c) / 3.0;
+            self.normal = cr.normalize();
+            return;
         }
+        let (mut an, mut area, mut moment) = (DVec3::ZERO, 0.0, DVec3::ZERO);
+        for f in &self.faces {
+            let v = f.area_normal();
+            let a = v.length();
+            an += v;
+            area += a;
+            moment += f.center() * a;
+        }
+        self.area = area;
+        self.center = moment / area;
+        self.normal = an.normalize();
+    }
+
+    /// Every face corner.
+    pub fn corner_points(&self) -> impl Iterator<Item = DVec3> + '_ {
+        self.faces.iter().flat_map(|f| f.corners)
+    }
+
+    /// The first face's triangle (the element's only one unless it is a cluster).
+    pub fn triangle(&self) -> u32 {
+        self.faces[0].triangle
+    }
+
+    /// Whether `other` is made of the same input triangles (the same element, maybe moved).
+    pub fn same_faces(&self, other: &Element) -> bool {
+        self.mesh == other.mesh
+            && self.faces.len() == other.faces.len()
+            && self
+                .faces
+                .iter()
+                .zip(&other.faces)
+                .all(|(a, b)| a.triangle == b.triangle)
+    }
+
+    /// A point on the element for `(u, v)` in the unit square: uniform by area over its faces
+    /// (`u` picks the face, then is stretched back to [0, 1) for the point on it).
+    pub fn point(&self, u: f64, v: f64) -> DVec3 {
+        let pick = |c: &[DVec3; 3], u: f64| {
+            let s = u.sqrt();
+            c[0] * (1.0 - s) + c[1] * (s * (1.0 - v)) + c[2] * (s * v)
+        };
+        if let [f] = self.faces.as_slice() {
+            return pick(&f.corners, u);
+        }
+        let mut t = u * self.area;
+        for f in &self.faces {
+            let a = f.area();
+            if t < a || std::ptr::eq(f, self.faces.last().unwrap()) {
+                return pick(&f.corners, (t / a).clamp(0.0, 1.0));
+            }
+            t -= a;
+        }
+        unreachable!("an element has at least one face")
+    }
+
+    /// Whether the element is a face cluster of several triangles.
+    pub fn is_cluster(&self) -> bool {
+        self.faces.len() > 1
     }
 }
 
@@ -72,7 +179,9 @@ pub fn leaf_lower_bound(longest: f64, area: f64, size: f64) -> f64 {
     (area / leaf_area).max(longest / size).max(1.0)
 }
 
-/// [`leaf_lower_bound`] summed over every triangle of `scene` at element size `size`.
+/// A lower bound on the elements of `scene` at element size `size`: [`leaf_lower_bound`] summed
+/// over the triangles bisection cuts, and for the small ones (which may join face clusters) their
+/// share of the largest cluster's area.
 pub fn estimate_elements(scene: &Scene, size: f64) -> f64 {
     scene
         .meshes
@@ -84,7 +193,14 @@ pub fn estimate_elements(scene: &Scene, size: f64) -> f64 {
         })
         .map(|[a, b, c]| {
             let longest = (b - a).length().max((c - b).length()).max((a - c).length());
-            leaf_lower_bound(longest, 0.5 * (b - a).cross(c - a).length(), size)
+            let area = 0.5 * (b - a).cross(c - a).length();
+            if longest <= size {
+                // It may join a face cluster: a disc of radius CLUSTER_RADIUS·size at most.
+                let r = crate::clusters::CLUSTER_RADIUS * size;
+                (area / (std::f64::consts::PI * r * r)).min(1.0)
+            } else {
+                leaf_lower_bound(longest, area, size)
+            }
         })
         .sum()
 }
@@ -160,9 +276,23 @@ pub fn build_elements(scene: &Scene, settings: &SolverSettings) -> Result<Vec<El
     if !(estimate <= limit as f64) {
         return Err(too_many(estimate));
     }
+    // Small triangles of dense meshes join face clusters, one element each.
+    let solid = crate::solids::solid_triangles(scene);
+    let groups = if settings.face_clusters {
+        crate::clusters::face_clusters(scene, &crate::clusters::classify(scene), &solid, size)
+    } else {
+        scene.meshes.iter().map(|m| vec![None; m.triangles.len()]).collect()
+    };
     let mut count = 0usize;
-    for m in &scene.meshes {
-        for tri in &m.triangles {
+    for (mi, m) in scene.meshes.iter().enumerate() {
+        for (ti, tri) in m.triangles.iter().enumerate() {
+            if let Some(seed) = groups[mi][ti] {
+                count += (seed as usize == ti) as usize;
+                if count > limit {
+                    return Err(too_many((limit + 1) as f64));
+                }
+                continue;
+            }
             let complete = bisect(tri.map(|v| m.positions[v as usize]), size, |_| {
                 count += 1;
                 count <= limit
@@ -173,15 +303,35 @@ pub fn build_elements(scene: &Scene, settings: &SolverSettings) -> Result<Vec<El
         }
     }
     let mut elements = Vec::with_capacity(count);
-    let solid = crate::solids::solid_triangles(scene);
     for (mi, m) in scene.meshes.iter().enumerate() {
+        // Each cluster's faces, gathered under its seed.
+        let mut members: std::collections::HashMap<u32, Vec<Face>> = Default::default();
+        for (ti, g) in groups[mi].iter().enumerate() {
+            if let Some(seed) = g {
+                members.entry(*seed).or_default().push(Face {
+                    corners: m.triangles[ti].map(|v| m.positions[v as usize]),
+                    triangle: ti as u32,
+                });
+            }
+        }
         for (ti, tri) in m.triangles.iter().enumerate() {
-            bisect(tri.map(|v| m.positions[v as usize]), size, |p| {
-                let mut e = Element::new(p, m.material[ti], mi as u32, ti as u32);
-                e.blocks_back = !solid[mi][ti];
-                elements.push(e);
-                true
-            })?;
+            match groups[mi][ti] {
+                Some(seed) if seed as usize == ti => {
+                    let faces = members.remove(&seed).unwrap_or_default();
+                    let mut e = Element::from_faces(faces, m.material[ti], mi as u32);
+                    e.blocks_back = !solid[mi][ti];
+                    elements.push(e);
+                }
+                Some(_) => {}
+                None => {
+                    bisect(tri.map(|v| m.positions[v as usize]), size, |p| {
+                        let mut e = Element::new(p, m.material[ti], mi as u32, ti as u32);
+                        e.blocks_back = !solid[mi][ti];
+                        elements.push(e);
+                        true
+                    })?;
+                }
+            }
         }
     }
     Ok(elements)
@@ -209,7 +359,7 @@ mod tests {
         assert!((area - want).abs() < 1e-12 * want.max(1.0));
         let n0 = els[0].normal;
         for e in &els {
-            assert!(longest_edge(&e.corners).1 <= 0.3 + 1e-12);
+            assert!(longest_edge(&e.faces[0].corners).1 <= 0.3 + 1e-12);
             assert!(
                 (e.normal - n0).length() < 1e-9,
                 "bisection keeps orientation"
@@ -260,7 +410,7 @@ mod tests {
             let got: Vec<[DVec3; 3]> = build_elements(&s, &s.solver)
                 .unwrap()
                 .iter()
-                .map(|e| e.corners)
+                .map(|e| e.faces[0].corners)
                 .collect();
             let mut want = Vec::new();
             recursive(t, 0.07, &mut want);
@@ -317,7 +467,8 @@ mod tests {
             DVec3::new(1.0, 1.0, 1.0),
         ];
         s.add_mesh("t", p, vec![[0, 1, 2], [0, 1, 3], [1, 2, 3]], mat);
-        for size in [10.0, 1.0, 0.3, 0.05, 0.01] {
+        // (Sizes above the edges would let the triangles cluster, where the bound is looser.)
+        for size in [1.0, 0.3, 0.05, 0.01] {
             s.solver.element_size = size;
             let n = build_elements(&s, &s.solver).unwrap().len() as f64;
             let est = estimate_elements(&s, size);

@@ -47,6 +47,17 @@ pub enum Error {
         /// Allowed size.
         limit_bytes: u64,
     },
+    /// Linking would make more links than the link budget (`--max-links`); the plan
+    /// ([`crate::engine::Prepared::new`]) coarsens the refinement and tries again.
+    #[error("more than {budget} links (the link budget, --max-links, or what this machine's memory holds) for {elements} elements at τ = {oracle}; use a larger --max-links, solver.oracle or element size, or fewer bins")]
+    LinkBudget {
+        /// The budget.
+        budget: u64,
+        /// Leaf elements.
+        elements: usize,
+        /// The oracle's threshold τ.
+        oracle: f64,
+    },
     /// The GPU layer failed (a Vulkan call, named by its operation).
     #[error(transparent)]
     Gpu(#[from] crate::gpu::error::GpuError),

@@ -153,8 +153,8 @@ impl Hierarchy {
         };
         let radius = idx
             .iter()
-            .flat_map(|&i| els[i as usize].corners.iter())
-            .map(|c| (*c - center).length())
+            .flat_map(|&i| els[i as usize].corner_points())
+            .map(|c| (c - center).length())
             .fold(0.0, f64::max);
         self.nodes.push(Node {
             center,
@@ -325,7 +325,7 @@ mod tests {
         }
         for (e, &leaf) in h.leaf_of_element.iter().enumerate() {
             assert_eq!(h.element(leaf), Some(e as u32));
-            for c in els[e].corners {
+            for c in els[e].corner_points() {
                 let mut a = leaf;
                 while a != u32::MAX {
                     let n = &h.nodes[a as usize];

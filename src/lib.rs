@@ -12,6 +12,7 @@ pub mod animate;
 pub mod bins;
 pub mod bound;
 pub mod brdf;
+pub mod clusters;
 pub mod elements;
 pub mod engine;
 pub mod error;

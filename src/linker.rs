@@ -82,18 +82,19 @@ pub fn in_front(receiver: &Element, sender: DVec3) -> bool {
     receiver.normal.dot(d) > 1e-7 * d.length()
 }
 
-/// True when some part of the triangle `corners` lies strictly in front of the plane of the
-/// leaf `receiver` (as [`in_front`] judges a point). A sender that straddles the receiver's plane
-/// sends light from its front part: judged by its center alone, that part was lost (a block's
-/// face cutting through floor elements lost 1.4% of the closed-hemisphere irradiance).
-pub fn partly_in_front(receiver: &Element, corners: &[DVec3; 3]) -> bool {
-    corners.iter().any(|&c| in_front(receiver, c))
+/// True when some part of the element `sender` (some corner of its faces) lies strictly in front
+/// of the plane of the leaf `receiver` (as [`in_front`] judges a point). A sender that straddles
+/// the receiver's plane sends light from its front part: judged by its center alone, that part
+/// was lost (a block's face cutting through floor elements lost 1.4% of the closed-hemisphere
+/// irradiance).
+pub fn partly_in_front(receiver: &Element, sender: &Element) -> bool {
+    sender.corner_points().any(|c| in_front(receiver, c))
 }
 
-/// True when some part of the triangle `corners` lies strictly behind the plane of the leaf
+/// True when some part of the element `sender` lies strictly behind the plane of the leaf
 /// `receiver` (its light arrives at the receiver's back, to be blocked).
-pub fn partly_behind(receiver: &Element, corners: &[DVec3; 3]) -> bool {
-    corners.iter().any(|&c| {
+pub fn partly_behind(receiver: &Element, sender: &Element) -> bool {
+    sender.corner_points().any(|c| {
         let d = c - receiver.center;
         receiver.normal.dot(d) < -1e-7 * d.length()
     })
@@ -158,7 +159,7 @@ impl<'a> Ctx<'a> {
         let (mut front, mut back) = (false, false);
         for k in s..self.h.nodes[s as usize].end {
             if let Some(e) = self.h.element(k) {
-                let c = &self.els[e as usize].corners;
+                let c = &self.els[e as usize];
                 front |= partly_in_front(re, c);
                 back |= partly_behind(re, c);
                 if front && back {
@@ -180,8 +181,8 @@ impl<'a> Ctx<'a> {
         };
         let (front, back) = match self.leaf(s) {
             Some(se) => (
-                partly_in_front(re, &se.corners),
-                partly_behind(re, &se.corners),
+                partly_in_front(re, se),
+                partly_behind(re, se),
             ),
             None => {
                 let h = re.normal.dot(ns.center - re.center);
@@ -338,12 +339,10 @@ pub fn build_links(
     let ctx = Ctx::new(h, els, bins, oracle);
     let links = refine_all(&|r, s| ctx.step(r, s), max_links);
     if links.len() as u64 > max_links {
-        return Err(crate::Error::Setting {
-            field: "oracle",
-            message: format!(
-                "more than {max_links} links (what this machine's memory holds) for {} elements at τ = {oracle}; use a larger solver.oracle, element size or fewer bins",
-                els.len()
-            ),
+        return Err(crate::Error::LinkBudget {
+            budget: max_links,
+            elements: els.len(),
+            oracle,
         });
     }
     let (links, offsets) = by_receiver(links, h.len());
@@ -552,7 +551,11 @@ pub fn calibrate_links(
         if spread <= 0.0 {
             return;
         }
-        let phi = projected_solid_angle(r.center, rn, &s.corners);
+        let phi: f64 = s
+            .faces
+            .iter()
+            .map(|f| projected_solid_angle(r.center, rn, &f.corners))
+            .sum();
         let delivered = bins.omega
             * cos_norm[re as usize]
             * s.area

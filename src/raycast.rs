@@ -14,9 +14,12 @@ use nalgebra::{Point3, Vector3};
 /// A ray–triangle hit.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Hit {
-    /// Index of the triangle hit: the leaf slot (index into [`System::leaves`]) for
-    /// [`RayCaster::new`], the index into the list given to [`RayCaster::from_triangles`].
+    /// What was hit: the leaf (index into [`System::leaves`]) for [`RayCaster::new`], the index
+    /// into the list given to [`RayCaster::from_triangles`].
     pub leaf: u32,
+    /// The triangle hit: the face slot ([`System::face_slots`]) for [`RayCaster::new`], as
+    /// `leaf` for [`RayCaster::from_triangles`].
+    pub shape: u32,
     /// Distance along the (unit) ray direction.
     pub t: f64,
     /// Barycentric weight of the element's second corner.
@@ -76,6 +79,8 @@ impl BHShape<f32, 3> for Shape {
 /// Closest-hit and occlusion queries over every leaf element (both faces are opaque).
 pub struct RayCaster {
     shapes: Vec<Shape>,
+    /// What each shape belongs to (empty: itself).
+    owner: Vec<u32>,
     bvh: Bvh<f32, 3>,
 }
 
@@ -117,24 +122,29 @@ fn entry(b: &Aabb<f32, 3>, o: DVec3, d: DVec3) -> f64 {
 }
 
 impl RayCaster {
-    /// Builds the BVH over the leaves of `sys` (in leaf-slot order).
+    /// Builds the BVH over the faces of the leaves of `sys` (in face-slot order); hits report
+    /// the leaf and the face slot.
     pub fn new(sys: &System) -> Self {
-        Self::from_triangles(
-            sys.leaves
+        let slots = sys.face_slots();
+        let mut c = Self::from_triangles(
+            slots
                 .iter()
-                .map(|l| {
-                    let e = sys.hierarchy.element(l.node).expect("leaf has an element") as usize;
-                    sys.elements[e].corners
-                })
+                .map(|&(li, k)| sys.leaf_element(li as usize).faces[k as usize].corners)
                 .collect(),
-        )
+        );
+        c.owner = slots.iter().map(|s| s.0).collect();
+        c
     }
 
     /// Builds the BVH over `triangles`; hits report indices into this list.
     pub fn from_triangles(triangles: Vec<[DVec3; 3]>) -> Self {
         let mut shapes: Vec<Shape> = triangles.into_iter().map(Shape::new).collect();
         let bvh = Bvh::build(&mut shapes);
-        Self { shapes, bvh }
+        Self {
+            shapes,
+            owner: Vec::new(),
+            bvh,
+        }
     }
 
     fn ray(o: DVec3, d: DVec3) -> Ray<f32, 3> {
@@ -165,8 +175,10 @@ impl RayCaster {
             }
             if let Some((t, u, v)) = intersect(&s.corners, o, d, t_min) {
                 if t < limit {
+                    let shape = self.index(s) as u32;
                     best = Some(Hit {
-                        leaf: self.index(s) as u32,
+                        leaf: self.owner.get(shape as usize).copied().unwrap_or(shape),
+                        shape,
                         t,
                         u,
                         v,
@@ -198,9 +210,9 @@ impl RayCaster {
         self.shapes.is_empty()
     }
 
-    /// Corners of triangle `leaf` (the element in leaf slot `leaf` for [`RayCaster::new`]).
-    pub fn corners(&self, leaf: u32) -> &[DVec3; 3] {
-        &self.shapes[leaf as usize].corners
+    /// Corners of triangle `shape` ([`Hit::shape`]).
+    pub fn corners(&self, shape: u32) -> &[DVec3; 3] {
+        &self.shapes[shape as usize].corners
     }
 }
 

@@ -105,20 +105,34 @@ impl System {
         settings: &SolverSettings,
         budget: &dyn Fn(u64, usize) -> Result<()>,
     ) -> Result<Self> {
-        Self::build_linked(scene, settings, budget, true)
+        Self::build_linked(scene, settings, budget, true, u64::MAX)
     }
 
     /// [`System::build_with`], linking only when `link` (a method that computes its own form
-    /// factors, like progressive refinement, gets an empty link set and spends no time on it).
+    /// factors, like progressive refinement, gets an empty link set and spends no time on it),
+    /// and refusing with [`Error::LinkBudget`] past `max_links` links (or what this machine's
+    /// memory holds), stopping as soon as it is passed.
     pub fn build_linked(
         scene: &Scene,
         settings: &SolverSettings,
         budget: &dyn Fn(u64, usize) -> Result<()>,
         link: bool,
+        max_links: u64,
     ) -> Result<Self> {
         let t0 = Instant::now();
         let bins = Bins::new(settings.bins)?;
-        let elements = build_elements(scene, settings)?;
+        // Methods without links (progressive refinement, instant radiosity) work on triangles.
+        let elements = if link {
+            build_elements(scene, settings)?
+        } else {
+            build_elements(
+                scene,
+                &SolverSettings {
+                    face_clusters: false,
+                    ..settings.clone()
+                },
+            )?
+        };
         if elements.is_empty() {
             return Err(Error::Setting {
                 field: "element_size",
@@ -152,17 +166,27 @@ impl System {
             None => Hierarchy::build(&elements),
         };
         let meshing_ms = t0.elapsed().as_secs_f64() * 1e3;
-        let max_links = crate::scene::max_links_limit();
+        let machine = crate::scene::max_links_limit();
+        let max_links = max_links.min(machine);
         let estimate = estimate_links(elements.len(), bins.count, settings.oracle);
-        if link && estimate > max_links as f64 {
+        if link && estimate > machine as f64 {
             return Err(Error::Setting {
                 field: "oracle",
                 message: format!(
-                    "about {estimate:.2e} links for {} elements × {} bins at τ = {}, more than the {max_links} this machine's memory holds; use a larger solver.oracle or element size, or fewer bins",
+                    "about {estimate:.2e} links for {} elements × {} bins at τ = {}, more than the {machine} this machine's memory holds; use a larger solver.oracle or element size, or fewer bins",
                     elements.len(),
                     bins.count,
                     settings.oracle
                 ),
+            });
+        }
+        // Far past the budget by the estimate (which runs low, never far high): refuse before
+        // linking, so that fitting a budget does not spend a linking on each try.
+        if link && estimate > 4.0 * max_links as f64 {
+            return Err(Error::LinkBudget {
+                budget: max_links,
+                elements: elements.len(),
+                oracle: settings.oracle,
             });
         }
         let (mut links, bound) = match groups {
@@ -312,6 +336,23 @@ impl System {
             u32::MAX => true,
             slot => self.bins.centers[bin].dot(self.leaves[slot as usize].normal) < READ_MARGIN,
         }
+    }
+
+    /// The element of leaf `li` (index into [`System::leaves`]).
+    pub fn leaf_element(&self, li: usize) -> &Element {
+        &self.elements[self.hierarchy.element(self.leaves[li].node).expect("leaf") as usize]
+    }
+
+    /// The frame's face slots as (leaf, face of its element): every leaf's first face, so that
+    /// slot `li` is a face of leaf `li`, then the other faces of face clusters, leaf by leaf.
+    pub fn face_slots(&self) -> Vec<(u32, u32)> {
+        let n = self.leaves.len() as u32;
+        let mut slots: Vec<(u32, u32)> = (0..n).map(|li| (li, 0)).collect();
+        for li in 0..n {
+            let faces = self.leaf_element(li as usize).faces.len() as u32;
+            slots.extend((1..faces).map(|k| (li, k)));
+        }
+        slots
     }
 
     /// Number of table rows (hierarchy nodes).

@@ -208,8 +208,13 @@ fn cluster_links_deliver_the_closed_hemisphere() {
             let re = &sys.elements[h.element(r).unwrap() as usize];
             for s in below(l.sender) {
                 let se = &sys.elements[h.element(s).unwrap() as usize];
-                let phi =
-                    antiradiance::linker::projected_solid_angle(re.center, re.normal, &se.corners);
+                let phi: f64 = se
+                    .faces
+                    .iter()
+                    .map(|f| {
+                        antiradiance::linker::projected_solid_angle(re.center, re.normal, &f.corners)
+                    })
+                    .sum();
                 let sign = if se.normal.dot(re.center - se.center) > 0.0 {
                     1.0
                 } else {

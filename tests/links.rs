@@ -35,7 +35,7 @@ fn check_coverage(scene: &Scene) {
             let c = count[r * n + s];
             if r == s {
                 assert_eq!(c, 0, "element {r} linked to itself");
-            } else if partly_in_front(&sys.elements[r], &sys.elements[s].corners) {
+            } else if partly_in_front(&sys.elements[r], &sys.elements[s]) {
                 // Senders straddling the receiver's plane too: their front part sends light.
                 front += 1;
                 assert_eq!(c, 1, "front pair ({r}, {s}) not covered");

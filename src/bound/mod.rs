@@ -98,14 +98,13 @@ pub fn sample_times(scene: &Scene, objects: &[usize]) -> Vec<f64> {
 
 /// `e` moved by the rigid transform `m` (area kept: a rigid motion does not change it).
 fn moved(e: &Element, m: &DMat4) -> Element {
-    let corners = e.corners.map(|c| m.transform_point3(c));
-    let [a, b, c] = corners;
-    Element {
-        corners,
-        center: (a + b + c) / 3.0,
-        normal: (b - a).cross(c - a).normalize(),
-        ..e.clone()
+    let mut out = e.clone();
+    for f in &mut out.faces {
+        f.corners = f.corners.map(|c| m.transform_point3(c));
     }
+    out.update_geometry();
+    out.area = e.area;
+    out
 }
 
 /// The group of every node (see [`Bound::node_group`]), from the groups of the elements.
@@ -140,8 +139,8 @@ fn place_nodes(h: &mut Hierarchy, els: &[Element], node_group: &[u32]) {
         };
         let radius = below
             .iter()
-            .flat_map(|e| e.corners.iter())
-            .map(|c| (*c - center).length())
+            .flat_map(|e| e.corner_points())
+            .map(|c| (c - center).length())
             .fold(0.0, f64::max);
         let n = &mut h.nodes[i];
         n.center = center;
@@ -207,8 +206,10 @@ pub fn build_bounded_links(
         for (i, (a, b)) in w[0].iter().zip(&w[1]).enumerate() {
             let g = element_group[i];
             if g != STATIC {
-                let d = (0..3)
-                    .map(|k| (a.corners[k] - b.corners[k]).length())
+                let d = a
+                    .corner_points()
+                    .zip(b.corner_points())
+                    .map(|(p, q)| (p - q).length())
                     .fold(0.0, f64::max);
                 travel[g as usize - 1] = travel[g as usize - 1].max(d);
             }
@@ -269,12 +270,10 @@ pub fn build_bounded_links(
     };
     let links = crate::linker::refine_all(&step, max_links);
     if links.len() as u64 > max_links {
-        return Err(crate::Error::Setting {
-            field: "oracle",
-            message: format!(
-                "more than {max_links} links (what this machine's memory holds) for {} elements at τ = {oracle} over the scene's motion; use a larger solver.oracle, element size or fewer bins",
-                els.len()
-            ),
+        return Err(crate::Error::LinkBudget {
+            budget: max_links,
+            elements: els.len(),
+            oracle,
         });
     }
     let (links, offsets) = crate::linker::by_receiver(links, h.len());
@@ -437,7 +436,7 @@ impl System {
             && els
                 .iter()
                 .zip(&self.elements)
-                .all(|(a, b)| a.mesh == b.mesh && a.triangle == b.triangle);
+                .all(|(a, b)| a.same_faces(b));
         if !same {
             return Ok(false);
         }

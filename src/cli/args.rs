@@ -429,6 +429,34 @@ pub struct PlanArgs {
     /// error-vs-time data (replaces the scene's and --bins/--iterations).
     #[arg(long, allow_negative_numbers = true, value_parser = positive)]
     pub target_error: Option<f64>,
+    /// Link budget: a scene whose links would pass it is linked coarser (a larger τ, then a
+    /// larger element size) until it fits, as the decisions state [default: 4000000].
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    pub max_links: Option<u64>,
+    /// Memory budget for the solver's tables, in bytes or with a K, M or G suffix (powers of
+    /// 1024), e.g. 1.5G: a scene whose tables would pass it gets a larger element size until
+    /// they fit [default: the device's memory on the GPU backend].
+    #[arg(long, value_parser = bytes)]
+    pub memory_budget: Option<u64>,
+}
+
+/// A byte count: a number with an optional K, M or G suffix (powers of 1024).
+fn bytes(s: &str) -> Result<u64, String> {
+    let t = s.trim();
+    let (num, scale) = match t.char_indices().last() {
+        Some((i, c)) if c.eq_ignore_ascii_case(&'k') => (&t[..i], 1u64 << 10),
+        Some((i, c)) if c.eq_ignore_ascii_case(&'m') => (&t[..i], 1 << 20),
+        Some((i, c)) if c.eq_ignore_ascii_case(&'g') => (&t[..i], 1 << 30),
+        _ => (t, 1),
+    };
+    match num.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 1.0 / scale as f64 && v * (scale as f64) < 1.8e19 => {
+            Ok((v * scale as f64) as u64)
+        }
+        _ => Err(format!(
+            "expected a positive byte count such as 800M or 1.5G, got '{s}'"
+        )),
+    }
 }
 
 impl PlanArgs {
@@ -437,6 +465,8 @@ impl PlanArgs {
         Options {
             all_passes: self.all_passes,
             target_error: self.target_error,
+            max_links: self.max_links,
+            memory_budget: self.memory_budget,
             ..Options::default()
         }
     }

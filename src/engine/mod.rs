@@ -18,8 +18,8 @@ pub mod stats;
 
 pub use backend::Backend;
 pub use drive::BATCH;
-pub use options::{GpuTuning, Options, SolverOverrides};
-pub use prepared::Prepared;
+pub use options::{GpuTuning, Options, SolverOverrides, DEFAULT_MAX_LINKS};
+pub use prepared::{fit_system, Prepared};
 pub use stats::{IterationFrame, RenderStats, Rendered, Setup};
 
 use crate::error::{Error, Result};

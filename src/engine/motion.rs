@@ -281,7 +281,7 @@ pub fn carry_over(before: &System, after: &System, old: &Table) -> Option<Table>
             .elements
             .iter()
             .zip(&after.elements)
-            .all(|(a, b)| a.mesh == b.mesh && a.triangle == b.triangle);
+            .all(|(a, b)| a.same_faces(b));
     if !same || old.bins != after.bins.count {
         return None;
     }

@@ -100,6 +100,14 @@ pub struct Options {
     pub gpu: GpuTuning,
     /// Settings of the baseline methods (rays per link, hemicube, subdivision, shots).
     pub baseline: crate::methods::MethodSettings,
+    /// Link budget (`--max-links`; `None`: [`DEFAULT_MAX_LINKS`]): a scene whose links at its
+    /// settings would pass it is linked coarser (a larger τ, then a larger element size) until
+    /// it fits, each step stated in the plan's decisions.
+    pub max_links: Option<u64>,
+    /// Memory budget in bytes for the tables (`--memory-budget`; `None`: the device's memory
+    /// on the GPU backend, none on the CPU): a scene whose tables would pass it gets a larger
+    /// element size until they fit, stated in the decisions.
+    pub memory_budget: Option<u64>,
 }
 
 impl Default for Options {
@@ -118,9 +126,17 @@ impl Default for Options {
             target_error: None,
             gpu: GpuTuning::default(),
             baseline: crate::methods::MethodSettings::default(),
+            max_links: None,
+            memory_budget: None,
         }
     }
 }
+
+/// The default link budget ([`Options::max_links`]): the paper's scale (its office had 632K
+/// links), where a propagation's global pass stays interactive on a GPU; on lavapipe the
+/// bundled Cornell box (0.7M links) iterates in well under a second, and 4M links take about
+/// six times as long as it.
+pub const DEFAULT_MAX_LINKS: u64 = 4_000_000;
 
 /// The settings a run uses: the scene's, with the options applied.
 #[derive(Debug, Clone)]

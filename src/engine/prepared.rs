@@ -2,7 +2,7 @@
 //! and camera, the discrete system (elements, hierarchy, links), the screen surfaces, the plan
 //! and the shadow-map views. `info` stops here; an [`super::Engine`] adds a backend.
 
-use super::options::{Options, Resolved};
+use super::options::{Options, Resolved, DEFAULT_MAX_LINKS};
 use crate::error::{Error, Result};
 use crate::frame::emitters;
 use crate::frame::shadow::{ShadowMaps, MAX_ATLAS};
@@ -70,36 +70,23 @@ impl Prepared {
         progress: &dyn Progress,
     ) -> Result<Self> {
         let Resolved {
-            settings,
+            mut settings,
             camera,
             target,
         } = options.resolve(scene)?;
-        progress.begin("linking", 1);
-        let budget = |rows: u64, bins: usize| -> Result<()> {
-            let Some(limit) = device_memory else {
-                return Ok(());
-            };
-            let needed = ResourcePlan::worst_table_bytes(
-                rows.min(u32::MAX as u64) as u32,
-                bins as u32,
-                settings.precision,
-            )?;
-            if needed > limit {
-                return Err(Error::TooLarge {
-                    what: format!(
-                        "GPU tables for {rows} nodes × {bins} bins (solver.element_size, solver.bins)"
-                    ),
-                    needed_bytes: needed,
-                    limit_bytes: limit,
-                });
-            }
-            Ok(())
+        let memory = match (options.memory_budget, device_memory) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
         };
-        let system = System::build_linked(scene, &settings, &budget, options.method.uses_links());
+        let max_links = options.max_links.unwrap_or(DEFAULT_MAX_LINKS);
+        progress.begin("linking", 1);
+        let fit = fit_system(scene, &mut settings, memory, max_links, options.method.uses_links());
         progress.end();
-        let system = system?;
+        let (system, fitted) = fit?;
         let surfaces = Surfaces::new(scene, &system);
-        Self::lit(scene, options, settings, camera, target, system, surfaces)
+        let mut prep = Self::lit(scene, options, settings, camera, target, system, surfaces)?;
+        prep.plan.decisions.extend(fitted);
+        Ok(prep)
     }
 
     /// This prepared scene with `scene`'s lights, where only lights changed (its geometry is
@@ -246,6 +233,96 @@ impl Prepared {
             ..Plan::everything(&self.scene, &self.lights, &self.system, &self.surfaces)
         };
         p
+    }
+}
+
+/// How much coarser each refinement step makes the discretization: the oracle's τ doubles up to
+/// [`MAX_ORACLE_STEPS`] times its given value, then the element size grows by this factor.
+pub const COARSEN_SIZE: f64 = 1.5;
+/// Doublings of τ before the element size grows.
+pub const MAX_ORACLE_STEPS: u32 = 4;
+
+/// Discretizes and links `scene` at `settings`, coarsened until the links fit `max_links` and
+/// the tables fit `memory` bytes (`None`: no limit): τ doubles (at most [`MAX_ORACLE_STEPS`]
+/// times), then the element size grows by [`COARSEN_SIZE`]; `settings` ends as used. Returns the
+/// system and one decision per coarsening (empty when the given settings fit). Refused only
+/// when even an element size of the scene's diagonal does not fit.
+pub fn fit_system(
+    scene: &Scene,
+    settings: &mut SolverSettings,
+    memory: Option<u64>,
+    max_links: u64,
+    link: bool,
+) -> Result<(System, Vec<String>)> {
+    let (oracle0, size0) = (settings.oracle, settings.element_size);
+    let (lo, hi) = scene.bounds();
+    let diagonal = (hi - lo).length();
+    let mut doublings = 0;
+    let mut reasons: Vec<&'static str> = Vec::new();
+    loop {
+        let precision = settings.precision;
+        let budget = |rows: u64, bins: usize| -> Result<()> {
+            let Some(limit) = memory else {
+                return Ok(());
+            };
+            let needed =
+                ResourcePlan::worst_table_bytes(rows.min(u32::MAX as u64) as u32, bins as u32, precision)?;
+            if needed > limit {
+                return Err(Error::TooLarge {
+                    what: format!(
+                        "GPU tables for {rows} nodes × {bins} bins (solver.element_size, solver.bins)"
+                    ),
+                    needed_bytes: needed,
+                    limit_bytes: limit,
+                });
+            }
+            Ok(())
+        };
+        let coarser_size = settings.element_size * COARSEN_SIZE;
+        let failed = match System::build_linked(scene, settings, &budget, link, max_links) {
+            Ok(sys) => {
+                let mut said = Vec::new();
+                if settings.oracle != oracle0 || settings.element_size != size0 {
+                    said.push(format!(
+                        "refinement coarsened to fit {}: τ {oracle0} → {}, element size {size0:.4} → {:.4} ({} elements, {} links); coarser links blur indirect light (docs/measurements.md: the Cornell box's image moves by about 1% relative RMSE from τ 1 to τ 4)",
+                        reasons.join(" and "),
+                        settings.oracle,
+                        settings.element_size,
+                        sys.elements.len(),
+                        sys.links.len()
+                    ));
+                }
+                return Ok((sys, said));
+            }
+            Err(e @ Error::LinkBudget { .. }) => {
+                if !reasons.contains(&"the link budget") {
+                    reasons.push("the link budget");
+                }
+                e
+            }
+            Err(e @ Error::TooLarge { .. }) => {
+                if !reasons.contains(&"the memory budget") {
+                    reasons.push("the memory budget");
+                }
+                e
+            }
+            Err(e) => return Err(e),
+        };
+        let tables = matches!(failed, Error::TooLarge { .. });
+        if !tables && doublings < MAX_ORACLE_STEPS {
+            settings.oracle *= 2.0;
+            doublings += 1;
+        } else if coarser_size <= diagonal {
+            settings.element_size = coarser_size;
+        } else {
+            return Err(Error::Setting {
+                field: "element_size",
+                message: format!(
+                    "the scene does not fit even at its coarsest settings (τ {}, element size {:.4}, the scene's diagonal): {failed}",
+                    settings.oracle, settings.element_size
+                ),
+            });
+        }
     }
 }
 

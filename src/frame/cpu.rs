@@ -29,14 +29,12 @@ impl SplatGrid {
     fn new(surf: &Surfaces) -> Self {
         let cell = surf.max_radius.max(1e-12);
         let mut cells: HashMap<_, Vec<u32>> = HashMap::new();
-        for (li, c) in surf.center.iter().enumerate() {
-            if surf.mode[li] != MODE_VERTEX {
-                let k = (*c / cell).floor();
-                cells
-                    .entry((k.x as i64, k.y as i64, k.z as i64))
-                    .or_default()
-                    .push(li as u32);
-            }
+        for li in surf.splat_slots() {
+            let k = (surf.center[li as usize] / cell).floor();
+            cells
+                .entry((k.x as i64, k.y as i64, k.z as i64))
+                .or_default()
+                .push(li);
         }
         Self { cell, cells }
     }
@@ -88,9 +86,11 @@ pub fn render(
                 *out = match caster.closest(view.eye, d, 0.0, f64::INFINITY) {
                     None => (scene.environment, DVec3::ZERO, SampleHit::Background),
                     Some(hit) => {
-                        let li = hit.leaf as usize;
-                        let leaf = &sys.leaves[li];
-                        let c = caster.corners(hit.leaf);
+                        // The face slot hit, and its leaf (another where it is a cluster's).
+                        let li = hit.shape as usize;
+                        let leaf = &sys.leaves[hit.leaf as usize];
+                        let normal = surf.normal[li];
+                        let c = caster.corners(hit.shape);
                         let p = c[0] * (1.0 - hit.u - hit.v) + c[1] * hit.u + c[2] * hit.v;
                         let mat = &sys.materials[leaf.material as usize];
                         let kind = if mat.ke.max_element() > 0.0 {
@@ -99,19 +99,19 @@ pub fn render(
                             SampleHit::Surface((p - view.eye).length())
                         };
                         let wo = -d;
-                        if wo.dot(leaf.normal) <= 0.0 {
+                        if wo.dot(normal) <= 0.0 {
                             (DVec3::ZERO, DVec3::ZERO, kind) // one-sided: the back is black
                         } else {
                             // The shading normal lights the pixel and picks the bin toward
                             // the eye (`shading.rs`); without `vn` it is the face normal.
                             let (ns, dir) = if surf.shaded[li] {
                                 let n = surf.interpolated_normal(li, hit.u, hit.v);
-                                let ns = shading_normal(n, leaf.normal, wo);
-                                (ns, eye_direction(wo, ns, leaf.normal))
+                                let ns = shading_normal(n, normal, wo);
+                                (ns, eye_direction(wo, ns, normal))
                             } else {
-                                (leaf.normal, wo)
+                                (normal, wo)
                             };
-                            let mut l = direct_radiance(lights, maps, p, leaf.normal, ns, mat, wo);
+                            let mut l = direct_radiance(lights, maps, p, normal, ns, mat, wo);
                             if surf.mode[li] == MODE_VERTEX {
                                 let cv = surf.corner_vertex[li];
                                 l += verts[cv[0] as usize] * (1.0 - hit.u - hit.v)
@@ -128,6 +128,7 @@ pub fn render(
                                             surf.radius[e],
                                         );
                                         if wt > 0.0 {
+                                            let e = surf.leaf[e] as usize;
                                             acc += display_radiance(sys, i_total, e, dir) * wt;
                                             wsum += wt;
                                         }

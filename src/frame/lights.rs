@@ -164,24 +164,62 @@ pub fn direct_in_table(sys: &System, lights: &[Light], maps: &ShadowMaps) -> Tab
         .map(|leaf| {
             let e = &sys.elements[sys.hierarchy.element(leaf.node).expect("leaf") as usize];
             let mut out = Vec::new();
+            if !e.is_cluster() {
+                for (i, light) in lights.iter().enumerate() {
+                    let Some(inc) = incident(light, e.center) else {
+                        continue;
+                    };
+                    let cos = -inc.travel.dot(leaf.normal);
+                    if cos <= 0.0 {
+                        continue;
+                    }
+                    let v = maps.visibility(i, e.center, leaf.normal, cos);
+                    if v <= 0.0 {
+                        continue;
+                    }
+                    let b = front_bin(&sys.bins, inc.travel, leaf.normal, -1.0);
+                    let cb = -sys.bins.centers[b].dot(leaf.normal);
+                    out.push((
+                        b,
+                        inc.irradiance * (cos * v / (sys.bins.omega * leaf.cos_norm * cb)),
+                    ));
+                }
+                return out;
+            }
+            // A face cluster receives each face's shadowed irradiance at the face's centroid
+            // (its own centroid may lie off the surface), area-weighted; one face is the leaf.
+            let points: Vec<(DVec3, DVec3, f64)> = e
+                .faces
+                .iter()
+                .map(|f| (f.center(), f.normal(), f.area() / e.area))
+                .collect();
             for (i, light) in lights.iter().enumerate() {
-                let Some(inc) = incident(light, e.center) else {
+                let mut sum = DVec3::ZERO;
+                let mut travel = None;
+                for &(p, n, share) in &points {
+                    let Some(inc) = incident(light, p) else {
+                        continue;
+                    };
+                    let cos = -inc.travel.dot(n);
+                    if cos <= 0.0 {
+                        continue;
+                    }
+                    let v = maps.visibility(i, p, n, cos);
+                    if v <= 0.0 {
+                        continue;
+                    }
+                    travel.get_or_insert(inc.travel);
+                    sum += inc.irradiance * (cos * v * share);
+                }
+                let Some(travel) = travel else {
                     continue;
                 };
-                let cos = -inc.travel.dot(leaf.normal);
-                if cos <= 0.0 {
-                    continue;
-                }
-                let v = maps.visibility(i, e.center, leaf.normal, cos);
-                if v <= 0.0 {
-                    continue;
-                }
-                let b = front_bin(&sys.bins, inc.travel, leaf.normal, -1.0);
+                // The bin of the light's direction at the cluster's center; its quadrature gives
+                // back the summed irradiance.
+                let travel = incident(light, e.center).map_or(travel, |inc| inc.travel);
+                let b = front_bin(&sys.bins, travel, leaf.normal, -1.0);
                 let cb = -sys.bins.centers[b].dot(leaf.normal);
-                out.push((
-                    b,
-                    inc.irradiance * (cos * v / (sys.bins.omega * leaf.cos_norm * cb)),
-                ));
+                out.push((b, sum / (sys.bins.omega * leaf.cos_norm * cb)));
             }
             out
         })

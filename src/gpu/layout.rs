@@ -296,30 +296,35 @@ pub struct GpuEmitterTriangle {
     pub ke: [f32; 4],
 }
 
-/// Per-leaf data of the frame passes (`FrameElement` in common.glsl), in leaf-slot order.
+/// Per-face data of the frame passes (`FrameElement` in common.glsl), in face-slot order
+/// ([`crate::frame::surfaces::Surfaces`]): the leaf's display data and the face's normal.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct GpuFrameElement {
-    /// Center (xyz), splat radius (w).
+    /// The leaf's center (xyz), splat radius (w).
     pub center_radius: [f32; 4],
-    /// Unit normal (xyz), area (w).
+    /// The leaf's unit normal (xyz), area (w).
     pub normal_area: [f32; 4],
     /// Table row, flat-surface id, shading mode, material index.
     pub ids: [u32; 4],
-    /// Cosine normalization (x); 1 where the leaf has shading normals, else 0 (y).
+    /// Cosine normalization (x); 1 where the face has shading normals, else 0 (y).
     pub cos_norm: [f32; 4],
+    /// The face's unit normal (xyz).
+    pub face_normal: [f32; 4],
 }
 
-/// One entry of the shared-vertex leaf lists (`AdjEntry` in common.glsl, 16 bytes): a leaf
-/// around the vertex and its shading normal there ([`crate::frame::surfaces::Surfaces`]
-/// `adjacency`, `adjacency_normal`).
+/// One entry of the shared-vertex lists (`AdjEntry` in common.glsl, 20 bytes): a slot whose
+/// leaf blends at the vertex, its shading normal there and its weight
+/// ([`crate::frame::surfaces::Surfaces`] `adjacency`, `adjacency_normal`, `adjacency_weight`).
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct GpuAdjEntry {
-    /// Leaf slot.
+    /// Face slot.
     pub leaf: u32,
     /// Its interpolated vertex normal at the shared vertex (not normalized).
     pub normal: [f32; 3],
+    /// Its weight.
+    pub weight: f32,
 }
 
 /// One element corner as vertex input of the shadow and G-buffer passes (32 bytes).

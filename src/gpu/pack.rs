@@ -7,7 +7,7 @@ use super::layout::{
 };
 use super::tables::TableLayout;
 use crate::frame::shadow::ShadowMaps;
-use crate::frame::surfaces::{Surfaces, MODE_SPLAT};
+use crate::frame::surfaces::Surfaces;
 use crate::scene::{Light, Scene};
 use crate::system::System;
 use ash::vk;
@@ -277,15 +277,12 @@ pub fn mat(m: DMat4) -> [[f32; 4]; 4] {
     m.to_cols_array_2d().map(|c| c.map(|v| v as f32))
 }
 
-/// Element corners for the shadow and G-buffer passes: three per leaf, then every input
+/// Face corners for the shadow and G-buffer passes: three per face slot, then every input
 /// triangle again, flagged [`FILLER`] and drawn behind the elements (bisection leaves
 /// T-junctions whose float rounding opens pinhole cracks between elements; these fill them).
-pub fn corners(scene: &Scene, sys: &System, surf: &Surfaces) -> Vec<CornerVertex> {
-    let mut out: Vec<CornerVertex> = (0..sys.leaves.len())
-        .flat_map(|li| {
-            let e = &sys.elements[sys.hierarchy.element(sys.leaves[li].node).unwrap_or(0) as usize];
-            (0..3).map(move |k| (li, e.corners[k], k))
-        })
+pub fn corners(scene: &Scene, _sys: &System, surf: &Surfaces) -> Vec<CornerVertex> {
+    let mut out: Vec<CornerVertex> = (0..surf.leaf.len())
+        .flat_map(|li| (0..3).map(move |k| (li, surf.corners[li][k], k)))
         .map(|(li, p, k)| CornerVertex {
             position: [p.x as f32, p.y as f32, p.z as f32],
             leaf: li as u32,
@@ -325,30 +322,35 @@ pub fn adjacency(surf: &Surfaces) -> Vec<GpuAdjEntry> {
     surf.adjacency
         .iter()
         .zip(&surf.adjacency_normal)
-        .map(|(&leaf, &n)| GpuAdjEntry {
+        .zip(&surf.adjacency_weight)
+        .map(|((&leaf, &n), &w)| GpuAdjEntry {
             leaf,
             normal: v3(n),
+            weight: w as f32,
         })
         .collect()
 }
 
-/// Leaf slots splatted by the frame (flat-surface elements, when the plan splats).
+/// Face slots splatted by the frame (one per flat-surface leaf, when the plan splats).
 pub fn splat_instances(surf: &Surfaces, splat: bool) -> Vec<u32> {
-    (0..surf.mode.len() as u32)
-        .filter(|&li| splat && surf.mode[li as usize] == MODE_SPLAT)
-        .collect()
+    if !splat {
+        return Vec::new();
+    }
+    surf.splat_slots().collect()
 }
 
-/// Per-leaf records of the frame passes, in leaf-slot order.
+/// Per-face records of the frame passes, in face-slot order.
 pub fn frame_elements(sys: &System, surf: &Surfaces) -> Vec<GpuFrameElement> {
-    sys.leaves
-        .iter()
-        .enumerate()
-        .map(|(li, l)| GpuFrameElement {
-            center_radius: v4(surf.center[li], surf.radius[li] as f32),
-            normal_area: v4(l.normal, l.area as f32),
-            ids: [l.node, surf.surface[li], surf.mode[li], l.material],
-            cos_norm: [l.cos_norm as f32, surf.shaded[li] as u32 as f32, 0.0, 0.0],
+    (0..surf.leaf.len())
+        .map(|li| {
+            let l = &sys.leaves[surf.leaf[li] as usize];
+            GpuFrameElement {
+                center_radius: v4(surf.center[li], surf.radius[li] as f32),
+                normal_area: v4(l.normal, l.area as f32),
+                ids: [l.node, surf.surface[li], surf.mode[li], l.material],
+                cos_norm: [l.cos_norm as f32, surf.shaded[li] as u32 as f32, 0.0, 0.0],
+                face_normal: v4(surf.normal[li], 0.0),
+            }
         })
         .collect()
 }

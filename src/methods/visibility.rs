@@ -123,7 +123,7 @@ impl<'a> Sampler<'a> {
         };
         let leaf = &self.sys.leaves[slot];
         let e = self.sys.hierarchy.element(leaf.node).expect("leaf slot") as usize;
-        let p = super::triangle_point(&self.sys.elements[e].corners, u[1], u[2]);
+        let p = self.sys.elements[e].point(u[1], u[2]);
         (p, leaf.normal)
     }
 }
@@ -256,7 +256,7 @@ mod tests {
                 // past it.
                 let side = |n: u32| {
                     let e = sys.hierarchy.element(n)?;
-                    let xs = sys.elements[e as usize].corners.map(|c| c.x);
+                    let xs: Vec<f64> = sys.elements[e as usize].corner_points().map(|c| c.x).collect();
                     let (lo, hi) = (
                         xs.iter().cloned().fold(9.0, f64::min),
                         xs.iter().cloned().fold(-9.0, f64::max),

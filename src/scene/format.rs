@@ -315,4 +315,6 @@ pub struct SolverDesc {
     /// Shadow-mapped samples of the area emitters, 0..=[`super::MAX_EMITTER_SAMPLES`] (0: their
     /// emission goes through the bins).
     pub emitter_samples: Option<i64>,
+    /// Group the small triangles of dense meshes into face clusters (default true).
+    pub face_clusters: Option<bool>,
 }

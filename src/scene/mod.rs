@@ -216,6 +216,9 @@ pub struct SolverSettings {
     /// Iterations each animated frame runs, warm-started from the previous frame's solution
     /// (§3.3; the paper's 4 by default): 1..=[`MAX_ITERATIONS`].
     pub iterations_per_frame: usize,
+    /// Whether small triangles of dense meshes are grouped into face clusters, one leaf each
+    /// ([`crate::clusters`]); off, every input triangle is at least one leaf.
+    pub face_clusters: bool,
 }
 
 /// Most emitter samples (each has six shadow-map faces).
@@ -237,6 +240,7 @@ impl Default for SolverSettings {
             filter_cutoff: crate::filter::CUTOFF,
             emitter_samples: None,
             iterations_per_frame: 4,
+            face_clusters: true,
         }
     }
 }

@@ -137,6 +137,7 @@ pub fn solver_settings(s: &SolverDesc, path: &Path) -> Result<SolverSettings> {
             "solver.iterations_per_frame",
             path,
         )?,
+        face_clusters: s.face_clusters.unwrap_or(d.face_clusters),
         emitter_samples: match s.emitter_samples {
             None => d.emitter_samples,
             Some(n) if (0..=super::MAX_EMITTER_SAMPLES as i64).contains(&n) => Some(n as usize),

@@ -127,16 +127,16 @@ fn frame_records_match_glsl() {
     );
     assert_eq!(size_of::<GpuEmitterTriangle>(), 64);
     assert_eq!(glsl_fields("EmitterTriangle"), ["c0", "c1", "c2", "ke"]);
-    assert_eq!(size_of::<GpuFrameElement>(), 64);
+    assert_eq!(size_of::<GpuFrameElement>(), 80);
     assert_eq!(
         glsl_fields("FrameElement"),
-        ["center_radius", "normal_area", "ids", "cos_norm"]
+        ["center_radius", "normal_area", "ids", "cos_norm", "face_normal"]
     );
     assert_eq!(size_of::<CornerVertex>(), 32);
     assert_eq!(offset_of!(CornerVertex, vertex), 16);
     assert_eq!(offset_of!(CornerVertex, normal), 20);
-    assert_eq!(size_of::<GpuAdjEntry>(), 16);
-    assert_eq!(glsl_fields("AdjEntry"), ["leaf", "nx", "ny", "nz"]);
+    assert_eq!(size_of::<GpuAdjEntry>(), 20);
+    assert_eq!(glsl_fields("AdjEntry"), ["leaf", "nx", "ny", "nz", "w"]);
     let names = [
         "I_TOTAL",
         "MATERIALS",

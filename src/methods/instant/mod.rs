@@ -329,7 +329,7 @@ fn follow(
         if dir.dot(n) >= 0.0 {
             return; // the back of a one-sided surface: opaque, reflects nothing
         }
-        let c = caster.corners(hit.leaf);
+        let c = caster.corners(hit.shape);
         let p = c[0] * (1.0 - hit.u - hit.v) + c[1] * hit.u + c[2] * hit.v;
         let kd = sys.materials[leaf.material as usize].kd;
         let reflected = flux * kd;

@@ -63,7 +63,8 @@ impl Elements {
         };
         let mat = |l: &crate::system::LeafAttributes| &sys.materials[l.material as usize];
         Self {
-            corners: sys.leaves.iter().map(|l| el(l).corners).collect(),
+            // Systems without links are built without face clusters: one face per leaf.
+            corners: sys.leaves.iter().map(|l| el(l).faces[0].corners).collect(),
             center: sys.leaves.iter().map(|l| el(l).center).collect(),
             normal: sys.leaves.iter().map(|l| l.normal).collect(),
             area: sys.leaves.iter().map(|l| l.area).collect(),
