@@ -114,7 +114,17 @@ impl Info {
 
     /// Prepares `scene` with `options` (no device) and gathers its statistics.
     pub fn of(scene: &Scene, options: &Options, progress: &dyn Progress) -> Result<Self> {
-        Self::new(&Prepared::new(scene, options, None, progress)?)
+        let mut info = Self::new(&Prepared::new(scene, options, None, progress)?)?;
+        info.decisions.push(format!(
+            "checked against a link budget of {} (--max-links) and {}; info opens no device: on the GPU backend the tables must also fit the device's memory and the link records its maxStorageBufferRange (lavapipe: 128 MiB, about 5.6M links)",
+            options
+                .max_links
+                .unwrap_or(crate::engine::DEFAULT_MAX_LINKS),
+            options.memory_budget.map_or("no memory budget (--memory-budget)".to_string(), |b| {
+                format!("a memory budget of {b} bytes (--memory-budget)")
+            })
+        ));
+        Ok(info)
     }
 
     /// Human-readable multi-line summary.
