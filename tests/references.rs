@@ -442,3 +442,32 @@ fn dragon_room_at_low_resolution() {
     };
     check("dragon room", &s, &truth, &bounds);
 }
+
+/// The bundled breakfast room (issue 35: 269,538 triangles as converted from its Mitsuba file,
+/// fitted to the link budget at τ 16) lit by its sun alone, 32×18: the sunlit stripes through
+/// the blinds and the light they bounce. With its sky on, the frame is 1.9× too bright on average
+/// (the sky's light through the walls is not cancelled at this link mesh; README "Real
+/// scenes"): no bound here holds that, so the sky is turned off. Measured: relative RMSE 0.619
+/// (CPU and GPU; most of it the stripes' edges, which the raster shadow maps and the path
+/// tracer's rays cut differently at this size, and the reference's noise, 0.116), mean −3.2%,
+/// indirect light 0.61, the 266 indirect-only pixels 27.5% off at the median; GPU vs CPU 2.0e-2.
+/// Without antiradiance: 0.678, mean +11%, indirect light 2.42, median 126%.
+#[test]
+fn breakfast_room_in_sunlight_at_low_resolution() {
+    let mut s =
+        load_scene(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/breakfast-room.toml"))
+            .unwrap();
+    s.environment = DVec3::ZERO;
+    s.camera.width = 32;
+    s.camera.height = 18;
+    let truth = path_traced(&s, 1024);
+    let bounds = Bounds {
+        rel_rmse: 0.75,
+        mean_bias: 0.06,
+        indirect_rmse: 0.75,
+        indirect_median: Some(0.4),
+        gpu_vs_cpu: 4e-2,
+        gpu_vs_cpu_f16: 9e-2,
+    };
+    check("breakfast room, sun", &s, &truth, &bounds);
+}
