@@ -268,7 +268,8 @@ pub fn face_clusters(
                                 >= MIN_SEED_COSINE
                     })
                     .max_by(|a, b| {
-                        let c = |seed: usize| classes.normals[first + seed].dot(classes.normals[gt]);
+                        let c =
+                            |seed: usize| classes.normals[first + seed].dot(classes.normals[gt]);
                         c(a.1).total_cmp(&c(b.1))
                     });
                 if let Some((_, seed)) = best {
@@ -320,7 +321,10 @@ mod tests {
         let mut seeds: Vec<u32> = of.iter().flatten().copied().collect();
         seeds.sort();
         seeds.dedup();
-        assert!(of.iter().all(|c| c.is_some()), "every small triangle joins a cluster");
+        assert!(
+            of.iter().all(|c| c.is_some()),
+            "every small triangle joins a cluster"
+        );
         // 3,200 triangles on a unit square; a disc of radius 0.125 holds about 0.05 of it.
         assert!(
             (20..=120).contains(&seeds.len()),

@@ -281,7 +281,11 @@ pub fn build_elements(scene: &Scene, settings: &SolverSettings) -> Result<Vec<El
     let groups = if settings.face_clusters {
         crate::clusters::face_clusters(scene, &crate::clusters::classify(scene), &solid, size)
     } else {
-        scene.meshes.iter().map(|m| vec![None; m.triangles.len()]).collect()
+        scene
+            .meshes
+            .iter()
+            .map(|m| vec![None; m.triangles.len()])
+            .collect()
     };
     let mut count = 0usize;
     for (mi, m) in scene.meshes.iter().enumerate() {

@@ -180,10 +180,7 @@ impl<'a> Ctx<'a> {
             return FRONT | BACK;
         };
         let (front, back) = match self.leaf(s) {
-            Some(se) => (
-                partly_in_front(re, se),
-                partly_behind(re, se),
-            ),
+            Some(se) => (partly_in_front(re, se), partly_behind(re, se)),
             None => {
                 let h = re.normal.dot(ns.center - re.center);
                 let tie = TIE * (h.abs() + ns.radius);
@@ -315,7 +312,11 @@ pub(crate) fn refine_all(step: &(dyn Fn(u32, u32) -> Step + Sync), max_links: u6
 /// the refinement starts from (the same breadth-first split as [`refine_all`], picked by a
 /// hash), counting at most `cap` links in the sample before it stops. Costs
 /// about `1/stride` of linking: the budget fitting asks it before each try.
-pub(crate) fn sample_links(step: &(dyn Fn(u32, u32) -> Step + Sync), stride: usize, cap: u64) -> f64 {
+pub(crate) fn sample_links(
+    step: &(dyn Fn(u32, u32) -> Step + Sync),
+    stride: usize,
+    cap: u64,
+) -> f64 {
     use std::sync::atomic::{AtomicU64, Ordering::Relaxed};
     fn count(step: &(dyn Fn(u32, u32) -> Step + Sync), made: &AtomicU64, cap: u64, r: u32, s: u32) {
         if made.load(Relaxed) > cap {
@@ -325,7 +326,9 @@ pub(crate) fn sample_links(step: &(dyn Fn(u32, u32) -> Step + Sync), stride: usi
             Step::Done(l) => {
                 made.fetch_add(l.is_some() as u64, Relaxed);
             }
-            Step::Split(p) => p.into_iter().for_each(|(a, b)| count(step, made, cap, a, b)),
+            Step::Split(p) => p
+                .into_iter()
+                .for_each(|(a, b)| count(step, made, cap, a, b)),
         }
     }
     let mut tasks = vec![(0u32, 0u32)];
@@ -441,17 +444,23 @@ mod sample_tests {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.toml");
         let s = crate::scene::load_scene(&path).unwrap();
         for size in [0.25, 0.1] {
-            let els = crate::elements::build_elements(&s, &crate::scene::SolverSettings {
-                element_size: size,
-                ..s.solver.clone()
-            })
+            let els = crate::elements::build_elements(
+                &s,
+                &crate::scene::SolverSettings {
+                    element_size: size,
+                    ..s.solver.clone()
+                },
+            )
             .unwrap();
             let h = Hierarchy::build(&els);
             let bins = Bins::new(128).unwrap();
             let ctx = Ctx::new(&h, &els, &bins, 1.0);
             let n = refine_all(&|r, s| ctx.step(r, s), u64::MAX).len() as f64;
             let e = sample_links(&|r, s| ctx.step(r, s), PROBE_STRIDE, u64::MAX);
-            println!("element size {size}: {n} links, sampled {e:.0} ({:+.1}%)", 100.0 * (e / n - 1.0));
+            println!(
+                "element size {size}: {n} links, sampled {e:.0} ({:+.1}%)",
+                100.0 * (e / n - 1.0)
+            );
             assert!((e / n - 1.0).abs() < 0.2, "{e} against {n}");
         }
     }

@@ -93,10 +93,16 @@ fn degenerate_and_duplicate_faces() {
     let p = write(&d, "s3.toml", "[[object]]\nmesh = \"some.obj\"\n");
     let s = load_scene(&p).unwrap();
     assert_eq!(s.triangle_count(), 2);
-    let zero: Vec<&String> = s.warnings.iter().filter(|w| w.contains("zero-area")).collect();
+    let zero: Vec<&String> = s
+        .warnings
+        .iter()
+        .filter(|w| w.contains("zero-area"))
+        .collect();
     assert_eq!(zero.len(), 1, "{:?}", s.warnings);
     assert!(
-        zero[0].contains("some.obj") && zero[0].contains("2 degenerate") && zero[0].contains("line "),
+        zero[0].contains("some.obj")
+            && zero[0].contains("2 degenerate")
+            && zero[0].contains("line "),
         "{}",
         zero[0]
     );

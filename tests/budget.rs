@@ -43,8 +43,13 @@ fn a_link_budget_coarsens_the_links_until_they_fit() {
     assert_eq!(said.len(), 1, "{:?}", prep.plan.decisions);
     assert!(said[0].contains(&format!("{links} links")), "{}", said[0]);
     // At the defaults nothing is coarsened, and nothing says so.
-    let prep = Prepared::new(&s, &Options::backend(Backend::Cpu), None, &antiradiance::progress::Silent)
-        .unwrap();
+    let prep = Prepared::new(
+        &s,
+        &Options::backend(Backend::Cpu),
+        None,
+        &antiradiance::progress::Silent,
+    )
+    .unwrap();
     assert_eq!(prep.settings.oracle, 1.0);
     assert!(!prep.plan.decisions.iter().any(|d| d.contains("coarsened")));
 }
@@ -91,10 +96,7 @@ fn a_scene_that_cannot_fit_is_refused_with_the_reason() {
         Ok(_) => panic!("one link fits"),
         Err(e) => e.to_string(),
     };
-    assert!(
-        err.contains("coarsest") && err.contains("links"),
-        "{err}"
-    );
+    assert!(err.contains("coarsest") && err.contains("links"), "{err}");
 }
 
 /// A fine sphere (81,920 triangles) in a closed room: its triangles group into face clusters, so
@@ -102,24 +104,8 @@ fn a_scene_that_cannot_fit_is_refused_with_the_reason() {
 /// same room with a coarse sphere; without clusters every triangle is a leaf.
 #[test]
 fn a_dense_mesh_makes_about_its_area_in_leaves() {
-    let sphere = |s: &mut Scene, level: usize| {
-        let m = s.add_material(Material::diffuse("s", 0.6));
-        let (p, t) = icosphere(level, 0.5, DVec3::new(0.0, 0.6, 0.0));
-        s.add_mesh("sphere", p, t, m);
-    };
     let room = |level: usize, clusters: bool| {
-        let mut s = Scene::empty();
-        let w = s.add_material(Material::diffuse("w", 0.7));
-        add_box(
-            &mut s,
-            "room",
-            DVec3::new(-1.5, 0.0, -1.5),
-            DVec3::new(1.5, 2.0, 1.5),
-            w,
-            true,
-        );
-        sphere(&mut s, level);
-        s.solver.element_size = 0.25;
+        let mut s = room_with_sphere(level);
         s.solver.face_clusters = clusters;
         s
     };
@@ -129,9 +115,8 @@ fn a_dense_mesh_makes_about_its_area_in_leaves() {
     let area = 4.0 * std::f64::consts::PI * 0.25;
     // The sphere is the last mesh (the room's walls come first).
     let last = |sys: &antiradiance::System| sys.elements.iter().map(|e| e.mesh).max().unwrap();
-    let sphere_leaves = |sys: &antiradiance::System| {
-        sys.elements.iter().filter(|e| e.mesh == last(sys)).count()
-    };
+    let sphere_leaves =
+        |sys: &antiradiance::System| sys.elements.iter().filter(|e| e.mesh == last(sys)).count();
     let leaves = sphere_leaves(&fine);
     println!(
         "sphere of 81920 triangles: {leaves} leaves ({} faces), {} links; 320 triangles: {} leaves, {} links",

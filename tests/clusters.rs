@@ -6,7 +6,7 @@ mod common;
 
 use antiradiance::engine::{Engine, Options};
 use antiradiance::frame::surfaces::{display_radiance, vertex_values, MODE_VERTEX};
-use antiradiance::scene::{Light, Material, Scene};
+use antiradiance::scene::{Light, Scene};
 use antiradiance::BackendKind as Backend;
 use common::*;
 use glam::DVec3;
@@ -14,19 +14,7 @@ use std::collections::HashSet;
 
 /// A sphere of 20,480 triangles (no `vn`) standing in a closed room, lit by a point light.
 fn room_with_fine_sphere() -> Scene {
-    let mut s = Scene::empty();
-    let w = s.add_material(Material::diffuse("w", 0.7));
-    add_box(
-        &mut s,
-        "room",
-        DVec3::new(-1.5, 0.0, -1.5),
-        DVec3::new(1.5, 2.0, 1.5),
-        w,
-        true,
-    );
-    let m = s.add_material(Material::diffuse("s", 0.6));
-    let (p, t) = icosphere(5, 0.5, DVec3::new(0.0, 0.6, 0.0));
-    s.add_mesh("sphere", p, t, m);
+    let mut s = room_with_sphere(5);
     s.lights.push(Light::Point {
         position: DVec3::new(0.6, 1.8, 0.9),
         intensity: DVec3::splat(3.0),
@@ -35,7 +23,6 @@ fn room_with_fine_sphere() -> Scene {
     s.camera.target = DVec3::new(0.0, 0.6, 0.0);
     s.camera.width = 48;
     s.camera.height = 36;
-    s.solver.element_size = 0.25;
     s.solver.iterations = 6;
     s
 }
@@ -84,7 +71,11 @@ fn a_clustered_sphere_shades_smoothly() {
     };
     edges.retain(|&(a, b)| facing(a) && facing(b));
     assert!(edges.len() > 1000, "{} edges", edges.len());
-    let mean = edges.iter().map(|&(a, _)| lum(values[a as usize])).sum::<f64>() / edges.len() as f64;
+    let mean = edges
+        .iter()
+        .map(|&(a, _)| lum(values[a as usize]))
+        .sum::<f64>()
+        / edges.len() as f64;
     assert!(mean > 0.0);
     let mut smooth: Vec<f64> = edges
         .iter()
@@ -113,7 +104,8 @@ fn a_clustered_sphere_shades_smoothly() {
             let leaves: HashSet<u32> = slots.iter().map(|&s| surf.leaf[s]).collect();
             (leaves.len() > 1).then(|| {
                 let v: Vec<f64> = slots.iter().map(|&s| own(s)).collect();
-                (v.iter().cloned().fold(f64::MIN, f64::max) - v.iter().cloned().fold(f64::MAX, f64::min))
+                (v.iter().cloned().fold(f64::MIN, f64::max)
+                    - v.iter().cloned().fold(f64::MAX, f64::min))
                     / mean
             })
         })

@@ -212,7 +212,9 @@ fn cluster_links_deliver_the_closed_hemisphere() {
                     .faces
                     .iter()
                     .map(|f| {
-                        antiradiance::linker::projected_solid_angle(re.center, re.normal, &f.corners)
+                        antiradiance::linker::projected_solid_angle(
+                            re.center, re.normal, &f.corners,
+                        )
                     })
                     .sum();
                 let sign = if se.normal.dot(re.center - se.center) > 0.0 {

@@ -433,10 +433,7 @@ impl System {
     ) -> crate::Result<bool> {
         let els = build_elements(scene, settings)?;
         let same = els.len() == self.elements.len()
-            && els
-                .iter()
-                .zip(&self.elements)
-                .all(|(a, b)| a.same_faces(b));
+            && els.iter().zip(&self.elements).all(|(a, b)| a.same_faces(b));
         if !same {
             return Ok(false);
         }

@@ -81,7 +81,13 @@ impl Prepared {
         };
         let max_links = options.max_links.unwrap_or(DEFAULT_MAX_LINKS);
         progress.begin("linking", 1);
-        let fit = fit_system(scene, &mut settings, memory, max_links, options.method.uses_links());
+        let fit = fit_system(
+            scene,
+            &mut settings,
+            memory,
+            max_links,
+            options.method.uses_links(),
+        );
         progress.end();
         let (system, fitted) = fit?;
         let surfaces = Surfaces::new(scene, &system);
@@ -267,8 +273,11 @@ pub fn fit_system(
             let Some(limit) = memory else {
                 return Ok(());
             };
-            let needed =
-                ResourcePlan::worst_table_bytes(rows.min(u32::MAX as u64) as u32, bins as u32, precision)?;
+            let needed = ResourcePlan::worst_table_bytes(
+                rows.min(u32::MAX as u64) as u32,
+                bins as u32,
+                precision,
+            )?;
             if needed > limit {
                 return Err(Error::TooLarge {
                     what: format!(

@@ -148,12 +148,14 @@ impl Surfaces {
                 s.mode.push(MODE_VERTEX);
                 let mut c = 0;
                 s.corner_vertex.push(face.corners.map(|p| {
-                    let id = *vertex_ids.entry(key(e.mesh as usize, p)).or_insert_with(|| {
-                        s.vertices.push(p);
-                        lists.push(Vec::new());
-                        cluster_vertex.push(false);
-                        (s.vertices.len() - 1) as u32
-                    });
+                    let id = *vertex_ids
+                        .entry(key(e.mesh as usize, p))
+                        .or_insert_with(|| {
+                            s.vertices.push(p);
+                            lists.push(Vec::new());
+                            cluster_vertex.push(false);
+                            (s.vertices.len() - 1) as u32
+                        });
                     if e.is_cluster() {
                         cluster_vertex[id as usize] = true;
                     } else {

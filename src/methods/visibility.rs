@@ -256,7 +256,10 @@ mod tests {
                 // past it.
                 let side = |n: u32| {
                     let e = sys.hierarchy.element(n)?;
-                    let xs: Vec<f64> = sys.elements[e as usize].corner_points().map(|c| c.x).collect();
+                    let xs: Vec<f64> = sys.elements[e as usize]
+                        .corner_points()
+                        .map(|c| c.x)
+                        .collect();
                     let (lo, hi) = (
                         xs.iter().cloned().fold(9.0, f64::min),
                         xs.iter().cloned().fold(-9.0, f64::max),

@@ -76,7 +76,9 @@ pub fn load_object(
             scan.polylines[0]
         ));
     }
-    if scan.faces_without_usemtl && !(default_override && o.materials.contains_key(DEFAULT_MATERIAL)) {
+    if scan.faces_without_usemtl
+        && !(default_override && o.materials.contains_key(DEFAULT_MATERIAL))
+    {
         warned.insert(format!(
             "{shown}: faces without usemtl get a grey diffuse material (Kd 0.5)"
         ));

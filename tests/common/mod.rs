@@ -391,6 +391,26 @@ pub fn measure(
     }
 }
 
+/// A closed room 3 × 2 × 3 (white, albedo 0.7, looking inward) with a sphere of radius 0.5
+/// (albedo 0.6) subdivided `level` times standing in it (the last mesh), at element size 0.25.
+pub fn room_with_sphere(level: usize) -> Scene {
+    let mut s = Scene::empty();
+    let w = s.add_material(Material::diffuse("w", 0.7));
+    add_box(
+        &mut s,
+        "room",
+        DVec3::new(-1.5, 0.0, -1.5),
+        DVec3::new(1.5, 2.0, 1.5),
+        w,
+        true,
+    );
+    let m = s.add_material(Material::diffuse("s", 0.6));
+    let (p, t) = icosphere(level, 0.5, DVec3::new(0.0, 0.6, 0.0));
+    s.add_mesh("sphere", p, t, m);
+    s.solver.element_size = 0.25;
+    s
+}
+
 /// The vertices and triangles of an icosphere subdivided `level` times, of `radius` at `center`,
 /// wound counter-clockwise seen from outside.
 pub fn icosphere(level: usize, radius: f64, center: DVec3) -> (Vec<DVec3>, Vec<[u32; 3]>) {

@@ -130,7 +130,13 @@ fn frame_records_match_glsl() {
     assert_eq!(size_of::<GpuFrameElement>(), 80);
     assert_eq!(
         glsl_fields("FrameElement"),
-        ["center_radius", "normal_area", "ids", "cos_norm", "face_normal"]
+        [
+            "center_radius",
+            "normal_area",
+            "ids",
+            "cos_norm",
+            "face_normal"
+        ]
     );
     assert_eq!(size_of::<CornerVertex>(), 32);
     assert_eq!(offset_of!(CornerVertex, vertex), 16);
