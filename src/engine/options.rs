@@ -132,10 +132,9 @@ impl Default for Options {
     }
 }
 
-/// The default link budget ([`Options::max_links`]): the paper's scale (its office had 632K
-/// links), where a propagation's global pass stays interactive on a GPU; on lavapipe the
-/// bundled Cornell box (0.7M links) iterates in well under a second, and 4M links take about
-/// six times as long as it.
+/// The default link budget ([`Options::max_links`]): a few times the paper's scale (its office
+/// had 632K links). Measured on lavapipe (docs/measurements.md): the breakfast room's 2.55M
+/// links iterate in 5.8× the Cornell box's 0.70M; no GPU figure has been taken for it yet.
 pub const DEFAULT_MAX_LINKS: u64 = 4_000_000;
 
 /// The settings a run uses: the scene's, with the options applied.
