@@ -57,6 +57,9 @@ pub struct Info {
     pub warnings: Vec<String>,
 }
 
+/// lavapipe's maxStorageBufferRange, which `info` (no device) plans against.
+const LAVAPIPE_STORAGE_RANGE: u64 = 128 << 20;
+
 impl Info {
     /// The statistics of a prepared scene: its system, plan and the memory both would take.
     /// GPU memory is the solver's images and buffers as [`ResourcePlan`] describes them, on a
@@ -115,14 +118,17 @@ impl Info {
     /// Prepares `scene` with `options` (no device) and gathers its statistics.
     pub fn of(scene: &Scene, options: &Options, progress: &dyn Progress) -> Result<Self> {
         let mut info = Self::new(&Prepared::new(scene, options, None, progress)?)?;
+        let records = info.work.global.primitives;
+        let chunks = crate::gpu::links::LinkChunks::new(records, LAVAPIPE_STORAGE_RANGE).chunks;
         info.decisions.push(format!(
-            "checked against a link budget of {} (--max-links) and {}; info opens no device: on the GPU backend the tables must also fit the device's memory and the link records its maxStorageBufferRange (lavapipe: 128 MiB, about 5.6M links)",
+            "checked against a link budget of {} (--max-links) and {}; info opens no device and assumes lavapipe's limits: maxImageDimension2D 16384, line width 255, maxStorageBufferRange 128 MiB (the {records} link records read in {chunks} range{}); on the GPU backend the tables must also fit the device's memory, which `render` checks",
             options
                 .max_links
                 .unwrap_or(crate::engine::DEFAULT_MAX_LINKS),
             options.memory_budget.map_or("no memory budget (--memory-budget)".to_string(), |b| {
                 format!("a memory budget of {b} bytes (--memory-budget)")
-            })
+            }),
+            if chunks == 1 { "" } else { "s" }
         ));
         Ok(info)
     }

@@ -105,6 +105,7 @@ impl GpuBackend {
                 max_line_width: None,
                 force_table_accumulation: tuning.force_table_accumulation,
                 features: Some(prep.plan.features),
+                link_range: tuning.link_range,
             },
         )
     }

@@ -95,25 +95,9 @@ impl Engine {
             BackendKind::Gpu => Some(context_for(options)?),
         };
         let memory = ctx.as_ref().map(|c| c.info.device_local_bytes);
-        // The GPU reads the link records as one storage buffer: the link budget stays within
-        // what maxStorageBufferRange holds (a link is one 12-byte record per footprint piece,
-        // 1.14 per link on Veach; room is left for twice that).
-        let mut fitted = options.clone();
-        let mut cap_note = None;
-        if let Some(c) = &ctx {
-            let per_link = 2 * std::mem::size_of::<crate::gpu::layout::GpuLink>() as u64;
-            let cap = c.info.max_storage_buffer_range as u64 / per_link;
-            let asked = options.max_links.unwrap_or(DEFAULT_MAX_LINKS);
-            if asked > cap {
-                fitted.max_links = Some(cap);
-                cap_note = Some(format!(
-                    "link budget {asked} lowered to {cap}: the link records are read as one storage buffer, and this device's maxStorageBufferRange ({} bytes) holds about that many links",
-                    c.info.max_storage_buffer_range
-                ));
-            }
-        }
-        let mut prep = Prepared::new(scene, &fitted, memory, progress)?;
-        prep.plan.decisions.extend(cap_note);
+        // The link records are read in chunks of maxStorageBufferRange (`gpu::links`): the
+        // device's memory is the only bound, which the preparation fits.
+        let prep = Prepared::new(scene, options, memory, progress)?;
         let mut engine = Self::with_context(prep, options, ctx, progress)?;
         engine.created = Some(created);
         Ok(engine)

@@ -66,6 +66,8 @@ pub struct GpuTuning {
     /// Accumulate L_in and L_push in the table format even where the device truncates float16
     /// blending.
     pub force_table_accumulation: bool,
+    /// Caps the bytes of link records one descriptor reads (exercises the chunked global pass).
+    pub link_range: Option<u64>,
 }
 
 /// Options of an [`super::Engine`] beyond the scene's own settings.

@@ -10,6 +10,7 @@ pub mod error;
 pub mod frame;
 pub mod handle;
 pub mod layout;
+pub mod links;
 pub mod memory;
 pub mod pack;
 pub mod passes;

@@ -216,6 +216,21 @@ pub fn write_set(
     images: &[(u32, vk::ImageView)],
     buffers: &[(u32, vk::Buffer)],
 ) {
+    let whole: Vec<_> = buffers
+        .iter()
+        .map(|&(b, buf)| (b, buf, (0, vk::WHOLE_SIZE)))
+        .collect();
+    write_set_ranges(ctx, set, sampler, images, &whole);
+}
+
+/// As [`write_set`] with each buffer's (offset, range) given.
+pub fn write_set_ranges(
+    ctx: &Context,
+    set: vk::DescriptorSet,
+    sampler: vk::Sampler,
+    images: &[(u32, vk::ImageView)],
+    buffers: &[(u32, vk::Buffer, (u64, u64))],
+) {
     let image_infos: Vec<[vk::DescriptorImageInfo; 1]> = images
         .iter()
         .map(|(_, view)| {
@@ -227,10 +242,11 @@ pub fn write_set(
         .collect();
     let buffer_infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
         .iter()
-        .map(|(_, b)| {
+        .map(|&(_, b, (offset, range))| {
             [vk::DescriptorBufferInfo::default()
-                .buffer(*b)
-                .range(vk::WHOLE_SIZE)]
+                .buffer(b)
+                .offset(offset)
+                .range(range)]
         })
         .collect();
     let mut writes: Vec<vk::WriteDescriptorSet> = images
@@ -244,7 +260,7 @@ pub fn write_set(
                 .image_info(info)
         })
         .collect();
-    writes.extend(buffers.iter().zip(&buffer_infos).map(|((b, _), info)| {
+    writes.extend(buffers.iter().zip(&buffer_infos).map(|((b, _, _), info)| {
         vk::WriteDescriptorSet::default()
             .dst_set(set)
             .dst_binding(*b)

@@ -7,6 +7,7 @@
 use super::context::Context;
 use super::handle::Owned;
 use super::layout::{as_bytes, binding, GpuCombo, GpuLink, GpuMaterial, QuadInstance, RowPair};
+use super::links::LinkChunks;
 use super::memory::{resource_set, Buffer, BufferDesc, Image, ImageDesc, MemoryReport, Purpose};
 use super::pack;
 use super::tables::{DrawData, TableLayout};
@@ -339,20 +340,29 @@ pub struct Resources {
     pub images: SolverImages<Image>,
     /// Buffers.
     pub buffers: SolverBuffers<Buffer>,
-    /// `sets[p]` binds `leaf_ex(p)` as current and `leaf_ex(1-p)` as next.
+    /// `sets[p]` binds `leaf_ex(p)` as current and `leaf_ex(1-p)` as next, and the first chunk
+    /// of link records.
     pub sets: [vk::DescriptorSet; 2],
+    /// `link_sets[c - 1][p]`: as `sets[p]` with chunk `c ≥ 1` of the link records bound.
+    pub link_sets: Vec<[vk::DescriptorSet; 2]>,
+    /// How the link records are split into descriptor ranges.
+    pub link_chunks: LinkChunks,
+    /// Largest descriptor range the link records are read through (`maxStorageBufferRange`).
+    link_range: u64,
+    set_layout: vk::DescriptorSetLayout,
     sampler: Owned<vk::Sampler>,
     _pool: Owned<vk::DescriptorPool>,
 }
 
 impl Resources {
     /// Creates and fills everything `plan` describes for `sys`, with descriptor sets of
-    /// `set_layout`.
+    /// `set_layout` that read the link records in ranges of at most `link_range` bytes.
     pub fn new(
         ctx: &Arc<Context>,
         plan: ResourcePlan,
         sys: &System,
         set_layout: vk::DescriptorSetLayout,
+        link_range: u64,
     ) -> Result<Self> {
         let mut images = plan.images.try_map(|d| d.create(ctx))?;
         let layout = &plan.layout;
@@ -390,45 +400,58 @@ impl Resources {
                 .upload(ctx, as_bytes(&super::pack::padded(plan.lobe_bins.clone())))?,
         };
         let sampler = super::pipelines::texel_sampler(ctx, "texelFetch sampler")?;
-        let kinds = super::pipelines::descriptor_kinds(binding::COUNT, &binding::BUFFERS);
-        let pool =
-            super::pipelines::descriptor_pool(ctx, &kinds, 2, "antiradiance descriptor pool")?;
-        let layouts = [set_layout, set_layout];
-        let sets = unsafe {
-            ctx.device.allocate_descriptor_sets(
-                &vk::DescriptorSetAllocateInfo::default()
-                    .descriptor_pool(pool.raw())
-                    .set_layouts(&layouts),
-            )
-        }
-        .vk("allocating descriptor sets")?;
-        let res = Self {
+        let link_chunks = LinkChunks::new(plan.draw.links.len() as u64, link_range);
+        let (pool, sets, link_sets) = allocate_sets(ctx, set_layout, link_chunks.chunks)?;
+        let mut res = Self {
             plan,
             images,
             buffers,
-            sets: [sets[0], sets[1]],
+            sets,
+            link_sets,
+            link_chunks,
+            link_range,
+            set_layout,
             sampler,
             _pool: pool,
         };
-        for p in 0..2 {
-            ctx.name(
-                res.sets[p],
-                &format!("antiradiance set (current = I_ex {p})"),
-            );
-            res.write_set(ctx, p);
-        }
+        res.rewrite_sets(ctx)?;
         Ok(res)
     }
 
-    /// Points both descriptor sets at the buffers again (after one was made anew).
-    pub fn rewrite_sets(&self, ctx: &Context) {
+    /// Points every descriptor set at the buffers again (after one was made anew), making the
+    /// sets anew where the link records now need another number of chunks (no command buffer
+    /// that used the old sets may be pending).
+    pub fn rewrite_sets(&mut self, ctx: &Arc<Context>) -> Result<()> {
+        let chunks = LinkChunks::new(self.plan.draw.links.len() as u64, self.link_range);
+        if chunks.chunks != self.link_chunks.chunks {
+            let (pool, sets, link_sets) = allocate_sets(ctx, self.set_layout, chunks.chunks)?;
+            (self._pool, self.sets, self.link_sets) = (pool, sets, link_sets);
+        }
+        self.link_chunks = chunks;
         for p in 0..2 {
-            self.write_set(ctx, p);
+            ctx.name(
+                self.sets[p],
+                &format!("antiradiance set (current = I_ex {p})"),
+            );
+            self.write_set(ctx, self.sets[p], p, 0);
+            for (c, s) in self.link_sets.iter().enumerate() {
+                self.write_set(ctx, s[p], p, c as u32 + 1);
+            }
+        }
+        Ok(())
+    }
+
+    /// The set of parity `p` with chunk `chunk` of the link records bound.
+    pub fn set_for_chunk(&self, p: usize, chunk: u32) -> vk::DescriptorSet {
+        match chunk {
+            0 => self.sets[p],
+            c => self.link_sets[c as usize - 1][p],
         }
     }
 
-    /// Writes set `p`: every image binding and the two storage buffers.
-    fn write_set(&self, ctx: &Context, p: usize) {
+    /// Writes `set` of parity `p`: every image binding and the storage buffers, the link
+    /// records' chunk `chunk`.
+    fn write_set(&self, ctx: &Context, set: vk::DescriptorSet, p: usize, chunk: u32) {
         let im = &self.images;
         let image_of = |b: u32| -> &Image {
             match b {
@@ -451,14 +474,15 @@ impl Resources {
             .map(|b| (b, image_of(b).view))
             .collect();
         let b = &self.buffers;
+        let whole = (0, vk::WHOLE_SIZE);
         let buffers = [
-            (binding::MATERIALS, b.materials.raw),
-            (binding::BIN_CENTERS, b.bin_centers.raw),
-            (binding::COMBOS, b.combos.raw),
-            (binding::LOBE_BINS, b.lobe_bins.raw),
-            (binding::LINKS, b.links.raw),
+            (binding::MATERIALS, b.materials.raw, whole),
+            (binding::BIN_CENTERS, b.bin_centers.raw, whole),
+            (binding::COMBOS, b.combos.raw, whole),
+            (binding::LOBE_BINS, b.lobe_bins.raw, whole),
+            (binding::LINKS, b.links.raw, self.link_chunks.range(chunk)),
         ];
-        super::pipelines::write_set(ctx, self.sets[p], self.sampler.raw(), &images, &buffers);
+        super::pipelines::write_set_ranges(ctx, set, self.sampler.raw(), &images, &buffers);
     }
 
     /// GPU memory by purpose (the descriptions the resources were created from).
@@ -475,4 +499,31 @@ impl Resources {
     pub fn draw(&self) -> &DrawData {
         &self.plan.draw
     }
+}
+
+/// A pool with the two parities' sets of `set_layout` for each of `chunks` link chunks.
+#[allow(clippy::type_complexity)]
+fn allocate_sets(
+    ctx: &Arc<Context>,
+    set_layout: vk::DescriptorSetLayout,
+    chunks: u32,
+) -> Result<(
+    Owned<vk::DescriptorPool>,
+    [vk::DescriptorSet; 2],
+    Vec<[vk::DescriptorSet; 2]>,
+)> {
+    let kinds = super::pipelines::descriptor_kinds(binding::COUNT, &binding::BUFFERS);
+    let n = 2 * chunks.max(1);
+    let pool = super::pipelines::descriptor_pool(ctx, &kinds, n, "antiradiance descriptor pool")?;
+    let layouts = vec![set_layout; n as usize];
+    let sets = unsafe {
+        ctx.device.allocate_descriptor_sets(
+            &vk::DescriptorSetAllocateInfo::default()
+                .descriptor_pool(pool.raw())
+                .set_layouts(&layouts),
+        )
+    }
+    .vk("allocating descriptor sets")?;
+    let pairs: Vec<[vk::DescriptorSet; 2]> = sets.chunks(2).map(|s| [s[0], s[1]]).collect();
+    Ok((pool, pairs[0], pairs[1..].to_vec()))
 }

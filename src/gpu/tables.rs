@@ -657,12 +657,6 @@ impl DrawData {
             first = first.max(end);
         }
         out.lines = total as u64;
-        // The global pass pulls record `k` by vertex index `2k + …`.
-        if 2 * total as u64 > u32::MAX as u64 {
-            return Err(Error::Invalid(format!(
-                "{total} global-pass lines exceed its 32-bit vertex index"
-            )));
-        }
         out.combos = combos;
         Ok(out)
     }

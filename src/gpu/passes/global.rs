@@ -7,7 +7,7 @@
 //! links of a receiver. Lines are drawn in one draw per sender image and line width
 //! (`DrawData::link_buckets`), so the vertex shader fetches I_ex from one image instead of
 //! summing the leaves' and both cluster parities'. It pulls its record by vertex index (no
-//! vertex input, no instances).
+//! vertex input, no instances), one descriptor range of records at a time (`gpu::links`).
 
 use super::{begin_rendering, end_rendering, Load, Pass, PipelineSpec};
 use crate::error::Result;
@@ -57,16 +57,20 @@ pub fn record(p: &Pass<'_>, res: &mut Resources, cur: usize) {
         ],
     );
     begin_rendering(p.ctx, p.cmd, &[(&im.l_in, Load::Clear)]);
+    let extent = im.l_in.extent;
     let mut bound = None;
-    for &(sender, width, first, count) in &res.plan.draw.link_buckets {
-        if bound != Some(sender) {
-            p.bind_global(&p.pipes.global, im.l_in.extent, sender);
-            bound = Some(sender);
+    // Records beyond one descriptor's range are drawn chunk by chunk (`gpu::links`).
+    for d in res.link_chunks.pieces(&res.plan.draw.link_buckets) {
+        if bound != Some((d.chunk, d.sender)) {
+            let set = res.set_for_chunk(cur, d.chunk);
+            p.bind_global(&p.pipes.global, extent, d.sender, set);
+            bound = Some((d.chunk, d.sender));
         }
-        // Record k is pulled by vertex index 2k + … (fits 32 bits: DrawData checks).
+        // Record k of the chunk is pulled by vertex index 2k + … (fits 32 bits: a chunk
+        // holds fewer than 2^31 records).
         unsafe {
-            p.ctx.device.cmd_set_line_width(p.cmd, width as f32);
-            p.ctx.device.cmd_draw(p.cmd, 2 * count, 1, 2 * first, 0);
+            p.ctx.device.cmd_set_line_width(p.cmd, d.width as f32);
+            p.ctx.device.cmd_draw(p.cmd, 2 * d.count, 1, 2 * d.first, 0);
         }
     }
     end_rendering(p.ctx, p.cmd);

@@ -288,13 +288,19 @@ impl Pass<'_> {
     /// Binds `pipeline`, the set and the push constants for a target of `extent` with rows
     /// `quad_width` texels wide.
     pub fn bind(&self, pipeline: &Owned<vk::Pipeline>, extent: vk::Extent2D, quad_width: u32) {
-        self.bind_with(pipeline, extent, quad_width, 0);
+        self.bind_with(pipeline, extent, quad_width, 0, self.set);
     }
 
     /// As [`Pass::bind`] for the global draws of senders in one image
-    /// ([`PassConstants::sender`]).
-    pub fn bind_global(&self, pipeline: &Owned<vk::Pipeline>, extent: vk::Extent2D, sender: u32) {
-        self.bind_with(pipeline, extent, 0, sender);
+    /// ([`PassConstants::sender`]) with `set` (the pass's set with one chunk of link records).
+    pub fn bind_global(
+        &self,
+        pipeline: &Owned<vk::Pipeline>,
+        extent: vk::Extent2D,
+        sender: u32,
+        set: vk::DescriptorSet,
+    ) {
+        self.bind_with(pipeline, extent, 0, sender, set);
     }
 
     fn bind_with(
@@ -303,6 +309,7 @@ impl Pass<'_> {
         extent: vk::Extent2D,
         quad_width: u32,
         sender: u32,
+        set: vk::DescriptorSet,
     ) {
         let c = PassConstants {
             target_width: extent.width,
@@ -315,7 +322,7 @@ impl Pass<'_> {
             self.ctx,
             self.cmd,
             self.layout,
-            self.set,
+            set,
             pipeline.raw(),
             super::layout::as_bytes(std::slice::from_ref(&c)),
         );

@@ -27,8 +27,9 @@ pub struct FollowUploads {
 }
 
 /// Writes `bytes` into `buf` through `staged`, making the buffer anew (and `desc` with it)
-/// where it is too small; returns whether it did. A storage buffer may not outgrow
-/// `maxStorageBufferRange` (the shaders read it whole), as [`GpuSolver::new`] checks.
+/// where it is too small; returns whether it did. A storage buffer other than the link
+/// records (read in chunks) may not outgrow `maxStorageBufferRange` (the shaders read it
+/// whole), as [`GpuSolver::new`] checks.
 fn rewrite(
     staged: &mut Staged,
     cmd: vk::CommandBuffer,
@@ -39,7 +40,10 @@ fn rewrite(
 ) -> Result<bool> {
     let grow = bytes.len() as u64 > buf.size;
     let range = ctx.info.max_storage_buffer_range as u64;
-    if desc.usage.contains(vk::BufferUsageFlags::STORAGE_BUFFER) && bytes.len() as u64 > range {
+    if desc.usage.contains(vk::BufferUsageFlags::STORAGE_BUFFER)
+        && bytes.len() as u64 > range
+        && desc.name != "links"
+    {
         return Err(Error::TooLarge {
             what: format!(
                 "GPU buffer '{}' after a move (maxStorageBufferRange; solver.element_size, solver.oracle)",
@@ -155,8 +159,8 @@ impl GpuSolver {
             staged.image(cmd, &mut im.lobe_norm, as_bytes(&lobe))?;
         }
         res.plan.draw = draw;
-        if grown > 0 {
-            res.rewrite_sets(&ctx);
+        if grown > 0 || res.link_chunks.records != (res.plan.draw.links.len() as u64).max(1) {
+            res.rewrite_sets(&ctx)?;
         }
         self.work = crate::gpu::work::Work::of(sys, &self.res.plan);
         // The moved system's source range; its scale is chosen with the new direct light, so
