@@ -57,6 +57,9 @@ pub enum Error {
         elements: usize,
         /// The oracle's threshold τ.
         oracle: f64,
+        /// Links this τ would make, as far as known (a sample's estimate, or a lower bound
+        /// where linking stopped at the budget): fitting jumps τ by it.
+        estimate: f64,
     },
     /// The GPU layer failed (a Vulkan call, named by its operation).
     #[error(transparent)]

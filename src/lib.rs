@@ -22,6 +22,7 @@ pub mod gpu;
 pub mod hierarchy;
 pub mod info;
 pub mod linker;
+pub mod meshed;
 pub mod methods;
 pub mod metrics;
 pub mod plan;

@@ -3,11 +3,12 @@
 
 use crate::bins::Bins;
 use crate::brdf::DiscreteLobe;
-use crate::elements::{build_elements, Element};
+use crate::elements::Element;
 use crate::error::{Error, Result};
 use crate::filter::FilterTables;
 use crate::hierarchy::Hierarchy;
 use crate::linker::{self, build_links, Link, Links};
+use crate::meshed::Meshed;
 use crate::plan::occlusion::{self, Occlusion};
 use crate::scene::{Material, Scene, SolverSettings};
 use glam::DVec3;
@@ -83,12 +84,16 @@ pub fn cpu_table_bytes(rows: u64, bins: u64) -> u64 {
     rows * bins * 24 * 5
 }
 
-/// Links the oracle makes, estimated before linking: every receiver gathers from senders of at
-/// most τ·ω_bin each over its sphere, about 2·m/τ of them (measured 2.1 per leaf and m/τ on the
-/// Cornell box), and never more than one per ordered pair of elements.
-pub fn estimate_links(elements: usize, bins: usize, oracle: f64) -> f64 {
-    let n = elements as f64;
-    (2.0 * n * bins as f64 / oracle).min(n * n)
+pub use crate::linker::estimate_links;
+
+/// What the link stage ([`System::link_meshed`]) makes.
+pub struct Linked {
+    /// Directional bins.
+    pub bins: Bins,
+    /// Links, before calibration.
+    pub links: Links,
+    /// The bound of keyframed objects' motion (their links for every pose).
+    pub bound: Option<crate::bound::Bound>,
 }
 
 impl System {
@@ -119,20 +124,24 @@ impl System {
         link: bool,
         max_links: u64,
     ) -> Result<Self> {
-        let t0 = Instant::now();
+        let meshed = Meshed::new(scene, settings, link)?;
+        let linked = Self::link_meshed(scene, &meshed, settings, budget, link, max_links)?;
+        Ok(Self::from_stages(scene, settings, meshed, linked))
+    }
+
+    /// The link stage on a meshed scene: the budget's checks, then the links (none when not
+    /// `link`). Leaves `meshed` as it was, so that a try past the budget can link it again at
+    /// another τ.
+    pub fn link_meshed(
+        scene: &Scene,
+        meshed: &Meshed,
+        settings: &SolverSettings,
+        budget: &dyn Fn(u64, usize) -> Result<()>,
+        link: bool,
+        max_links: u64,
+    ) -> Result<Linked> {
         let bins = Bins::new(settings.bins)?;
-        // Methods without links (progressive refinement, instant radiosity) work on triangles.
-        let elements = if link {
-            build_elements(scene, settings)?
-        } else {
-            build_elements(
-                scene,
-                &SolverSettings {
-                    face_clusters: false,
-                    ..settings.clone()
-                },
-            )?
-        };
+        let (elements, hierarchy) = (&meshed.elements, &meshed.hierarchy);
         if elements.is_empty() {
             return Err(Error::Setting {
                 field: "element_size",
@@ -149,23 +158,6 @@ impl System {
                 limit_bytes: CPU_TABLE_LIMIT_BYTES,
             });
         }
-        // Keyframed objects are their own subtrees, linked for their whole motion (§3.3).
-        let groups = if link {
-            crate::bound::mesh_groups(scene)
-        } else {
-            None
-        };
-        let hierarchy = match &groups {
-            Some((_, mesh_group)) => {
-                let g: Vec<u32> = elements
-                    .iter()
-                    .map(|e| mesh_group[e.mesh as usize])
-                    .collect();
-                Hierarchy::build_grouped(&elements, &g)
-            }
-            None => Hierarchy::build(&elements),
-        };
-        let meshing_ms = t0.elapsed().as_secs_f64() * 1e3;
         let machine = crate::scene::max_links_limit();
         let max_links = max_links.min(machine);
         let estimate = estimate_links(elements.len(), bins.count, settings.oracle);
@@ -187,24 +179,25 @@ impl System {
                 budget: max_links,
                 elements: elements.len(),
                 oracle: settings.oracle,
+                estimate,
             });
         }
-        let (mut links, bound) = match groups {
+        let (links, bound) = match &meshed.groups {
             Some((objects, mesh_group)) => {
                 let (links, bound) = crate::bound::build_bounded_links(
                     scene,
-                    &hierarchy,
-                    &elements,
+                    hierarchy,
+                    elements,
                     &bins,
                     settings.oracle,
                     max_links,
-                    objects,
-                    &mesh_group,
+                    objects.clone(),
+                    mesh_group,
                 )?;
                 (links, Some(bound))
             }
             None if link => (
-                build_links(&hierarchy, &elements, &bins, settings.oracle, max_links)?,
+                build_links(hierarchy, elements, &bins, settings.oracle, max_links)?,
                 None,
             ),
             None => (
@@ -216,6 +209,28 @@ impl System {
                 None,
             ),
         };
+        Ok(Linked { bins, links, bound })
+    }
+
+    /// The system of a meshed and linked scene: spreading tables, calibrated form factors,
+    /// leaf attributes, lobes, the bound's moving links and the energy normalization.
+    pub fn from_stages(
+        scene: &Scene,
+        settings: &SolverSettings,
+        meshed: Meshed,
+        linked: Linked,
+    ) -> Self {
+        let Meshed {
+            elements,
+            hierarchy,
+            meshing_ms,
+            ..
+        } = meshed;
+        let Linked {
+            bins,
+            mut links,
+            bound,
+        } = linked;
         let filters = FilterTables::new(&bins, &links.used_classes, settings.filter_cutoff);
         let t1 = Instant::now();
         crate::linker::calibrate_form_factors(&mut links, &hierarchy, &elements, &bins, &filters);
@@ -274,7 +289,7 @@ impl System {
             sys.conserve_energy(scene);
             sys.links.linking_ms += t2.elapsed().as_secs_f64() * 1e3;
         }
-        Ok(sys)
+        sys
     }
 
     /// Makes the discrete transport of a closed scene conserve energy exactly.

@@ -29,7 +29,7 @@ use std::time::Instant;
 pub const SAMPLES_PER_SEGMENT: usize = 8;
 
 /// [`Bound::node_group`] of a static node.
-pub const STATIC: u32 = 0;
+pub use crate::meshed::STATIC;
 /// [`Bound::node_group`] of a cluster over more than one group (a top cluster).
 pub const MIXED: u32 = u32::MAX;
 
@@ -52,28 +52,7 @@ pub struct Bound {
     pub moving_links: Vec<u32>,
 }
 
-/// The keyframed objects of `scene` and the group of every mesh (0 static, `g + 1` moving with
-/// the `g`-th), or `None` when no object has keyframes (nothing to bound).
-pub fn mesh_groups(scene: &Scene) -> Option<(Vec<usize>, Vec<u32>)> {
-    let objects: Vec<usize> = (0..scene.objects.len())
-        .filter(|&i| {
-            scene.objects[i]
-                .motion
-                .as_ref()
-                .is_some_and(|m| !m.keys.is_empty())
-        })
-        .collect();
-    if objects.is_empty() {
-        return None;
-    }
-    let mut group = vec![STATIC; scene.meshes.len()];
-    for (g, &o) in objects.iter().enumerate() {
-        for m in scene.objects[o].meshes.clone() {
-            group[m] = g as u32 + 1;
-        }
-    }
-    Some((objects, group))
-}
+pub use crate::meshed::mesh_groups;
 
 /// The times the motion of `objects` is sampled at: 0, every key's time, and
 /// [`SAMPLES_PER_SEGMENT`] evenly spaced steps between consecutive ones (the values hold
@@ -274,6 +253,7 @@ pub fn build_bounded_links(
             budget: max_links,
             elements: els.len(),
             oracle,
+            estimate: links.len() as f64,
         });
     }
     let (links, offsets) = crate::linker::by_receiver(links, h.len());

@@ -8,6 +8,7 @@ use crate::frame::emitters;
 use crate::frame::shadow::{ShadowMaps, MAX_ATLAS};
 use crate::frame::surfaces::Surfaces;
 use crate::gpu::resources::ResourcePlan;
+use crate::meshed::Meshed;
 use crate::plan::target::TargetChoice;
 use crate::plan::Plan;
 use crate::progress::Progress;
@@ -251,7 +252,7 @@ pub const MAX_ORACLE_STEPS: u32 = 4;
 
 /// Discretizes and links `scene` at `settings`, coarsened until the links fit `max_links` and
 /// the tables fit `memory` bytes (`None`: no limit): τ doubles (at most [`MAX_ORACLE_STEPS`]
-/// times), then the element size grows by [`COARSEN_SIZE`]; `settings` ends as used. Returns the
+/// times; as many at once as the sampled count asks for), then the element size grows by [`COARSEN_SIZE`]; `settings` ends as used. Returns the
 /// system and one decision per coarsening (empty when the given settings fit). Refused only
 /// when even an element size of the scene's diagonal does not fit.
 pub fn fit_system(
@@ -267,6 +268,8 @@ pub fn fit_system(
     let mut doublings = 0;
     let mut reasons: Vec<&'static str> = Vec::new();
     let (mut tries, mut tries_ms) = (0u32, 0.0f64);
+    // Meshed once per element size: the tries at larger τ link the same elements.
+    let mut meshed: Option<Meshed> = None;
     loop {
         let precision = settings.precision;
         let budget = |rows: u64, bins: usize| -> Result<()> {
@@ -290,10 +293,19 @@ pub fn fit_system(
             Ok(())
         };
         let coarser_size = settings.element_size * COARSEN_SIZE;
+        let m = match meshed.take() {
+            Some(m) if m.element_size == settings.element_size => m,
+            old => {
+                // A meshing for a size that did not fit is part of the fitting's cost.
+                tries_ms += old.map_or(0.0, |o| o.meshing_ms);
+                Meshed::new(scene, settings, link)?
+            }
+        };
         let t = Instant::now();
-        let result = System::build_linked(scene, settings, &budget, link, max_links);
+        let result = System::link_meshed(scene, &m, settings, &budget, link, max_links);
         let failed = match result {
-            Ok(mut sys) => {
+            Ok(linked) => {
+                let mut sys = System::from_stages(scene, settings, m, linked);
                 // The tries that did not fit are part of what linking this scene cost.
                 sys.links.linking_ms += tries_ms;
                 let mut said = Vec::new();
@@ -314,23 +326,32 @@ pub fn fit_system(
                 if !reasons.contains(&"the link budget") {
                     reasons.push("the link budget");
                 }
+                meshed = Some(m);
                 e
             }
             Err(e @ Error::TooLarge { .. }) => {
                 if !reasons.contains(&"the memory budget") {
                     reasons.push("the memory budget");
                 }
+                meshed = Some(m);
                 e
             }
             Err(e) => return Err(e),
         };
         tries += 1;
         tries_ms += t.elapsed().as_secs_f64() * 1e3;
-        let tables = matches!(failed, Error::TooLarge { .. });
-        if !tables && doublings < MAX_ORACLE_STEPS {
-            settings.oracle *= 2.0;
-            doublings += 1;
-        } else if coarser_size <= diagonal {
+        if let Error::LinkBudget { estimate, .. } = failed {
+            if doublings < MAX_ORACLE_STEPS {
+                // Links fall about as 1/τ (Cornell box τ 1 → 16: 699K → 39K links, exponent
+                // 1.04): jump straight to the doubling the estimate asks for.
+                let wanted = (estimate / max_links as f64).log2().ceil().max(1.0) as u32;
+                let k = wanted.min(MAX_ORACLE_STEPS - doublings);
+                settings.oracle *= f64::from(1u32 << k);
+                doublings += k;
+                continue;
+            }
+        }
+        if coarser_size <= diagonal {
             settings.element_size = coarser_size;
         } else {
             return Err(Error::Setting {
