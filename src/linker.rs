@@ -143,7 +143,7 @@ impl<'a> Ctx<'a> {
             return 0.0;
         }
         let (gr, gs) = (self.group[r as usize], self.group[s as usize]);
-        if gr == gs && gr != crate::bound::MIXED {
+        if gr == gs && gr != crate::meshed::MIXED {
             return 0.0;
         }
         self.margin[r as usize] + self.margin[s as usize]

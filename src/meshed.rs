@@ -9,8 +9,10 @@ use crate::hierarchy::Hierarchy;
 use crate::scene::{Scene, SolverSettings};
 use std::time::Instant;
 
-/// Group of a mesh that does not move.
+/// Group of a mesh (or node) that does not move.
 pub const STATIC: u32 = 0;
+/// Group of a cluster node over more than one group (a top cluster).
+pub const MIXED: u32 = u32::MAX;
 
 /// A scene meshed into leaf elements and their hierarchy.
 #[derive(Debug, Clone)]

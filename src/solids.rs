@@ -20,9 +20,14 @@ use crate::scene::{Light, Scene};
 use glam::DVec3;
 use std::collections::HashMap;
 
+/// Distances to a plane below this fraction of the scene's size count as on the plane: float32
+/// OBJ coordinates (6e-8 relative) make flat quads and tessellated spheres that far from exact, and
+/// a sliver that thin cannot occlude anything visible.
+pub const TOLERANCE: f64 = 1e-6;
+
 /// Per mesh, per triangle: true when a corner of the triangle's connected surface (triangles
 /// sharing edges at exact coordinates, as [`crate::system::closed_surfaces`] compares them) lies
-/// behind its plane, by more than [`crate::plan::occlusion::TOLERANCE`] of the scene's size; or
+/// behind its plane, by more than [`TOLERANCE`] of the scene's size; or
 /// when the surface is closed (every edge shared by exactly two of its triangles), a corner lies
 /// in front of the triangle's plane, and nothing (a vertex, the camera, a point or spot light)
 /// lies inside the surface's bounding box.
@@ -68,7 +73,7 @@ pub fn solid_triangles(scene: &Scene) -> Vec<Vec<bool>> {
     }
     // Per component: its corners, and whether it is closed.
     let (lo, hi) = scene.bounds();
-    let eps = (hi - lo).length().max(1e-300) * crate::plan::occlusion::TOLERANCE;
+    let eps = (hi - lo).length().max(1e-300) * TOLERANCE;
     let mut corners: HashMap<usize, Vec<DVec3>> = HashMap::new();
     for (t, c) in tris.iter().enumerate() {
         let r = find(&mut parent, t);

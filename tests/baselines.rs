@@ -165,7 +165,8 @@ fn parallel_unit_squares_exchange_the_analytic_flux() {
                 "{method} {backend}: parallel squares {phi:.5} vs {want:.5} ({:+.2}%)",
                 e * 100.0
             );
-            assert!(e.abs() < 0.02, "{method} {backend}: {phi} vs {want}");
+            // Measured +0.04% … +0.10%; bound 3× the largest.
+            assert!(e.abs() < 0.003, "{method} {backend}: {phi} vs {want}");
         }
     }
 }

@@ -179,7 +179,7 @@ fn clipped_area(poly: &[(f64, f64)], x0: f64, y0: f64) -> f64 {
 /// pixels the worst absolute error is 0.16% of Ke (the 32×32 grid's error along an edge). The
 /// 2×2 samples alone would be off by 100% (a pixel partly covered with no sample inside; checked
 /// below, so the bound tells them apart).
-/// Bounds: the 10%, and 0.5% of Ke.
+/// Bounds 3× the measured: 4%, and 0.5% of Ke.
 #[test]
 fn emitter_edges_match_the_box_filtered_coverage() {
     let ke = 10.0;
@@ -264,7 +264,8 @@ fn emitter_edges_match_the_box_filtered_coverage() {
             100.0 * worst_abs
         );
         assert!(edges > 30, "{edges} edge pixels");
-        assert!(worst_rel < 0.1, "{backend:?}: {worst_rel}");
+        // Measured 1.34% on both backends; bound 3× that.
+        assert!(worst_rel < 0.04, "{backend:?}: {worst_rel}");
         assert!(worst_abs < 5e-3, "{backend:?}: {worst_abs}");
     }
 }

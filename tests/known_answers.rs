@@ -118,8 +118,9 @@ fn parallel_unit_squares_exchange_the_analytic_flux() {
     );
     let want = PI * 0.199_825;
     println!("parallel: {phi:.5} vs {want:.5}");
+    // Measured +0.10%; bound 3× that.
     assert!(
-        (phi - want).abs() / want < 0.02,
+        (phi - want).abs() / want < 0.003,
         "parallel flux {phi} vs {want}"
     );
 }
@@ -134,8 +135,10 @@ fn perpendicular_unit_squares_exchange_the_analytic_flux() {
     );
     let want = PI * 0.200_044;
     println!("perpendicular: {phi:.5} vs {want:.5}");
+    // Measured +0.30% (the shared edge, where the calibration's point-to-triangle integral is
+    // steepest); bound 3× that.
     assert!(
-        (phi - want).abs() / want < 0.02,
+        (phi - want).abs() / want < 0.009,
         "perpendicular flux {phi} vs {want}"
     );
 }

@@ -110,29 +110,29 @@ fn frames_against_scratch(o: &Options, frames: usize, fps: f64) -> Vec<f64> {
     errors
 }
 
-/// Every animated frame at 6 fps (the block moves 4 cm and turns 2.5° per frame) within 0.05
+/// Every animated frame at 6 fps (the block moves 4 cm and turns 2.5° per frame) within 0.018
 /// RMSE/mean of `render --time` (the still scene at that time, from scratch). Measured (CPU,
-/// bounded link mesh): 0.0061 and 0.0061, of which 0.0060 is the bounded mesh's hierarchy
+/// bounded link mesh): 0.0061 and 0.0060, of which 0.0060 is the bounded mesh's hierarchy
 /// against the still scene's (the same at rest); against the bounded scene at that time 0.0012
-/// warm, 0.0135 cold. The bound is the issue's.
+/// warm, 0.0135 cold. Bound 3× the measured (the issue asked for 0.05).
 #[test]
 fn cpu_frames_match_render_at_their_time() {
     let errors = frames_against_scratch(&options(BackendKind::Cpu), 3, 6.0);
     for e in &errors {
-        assert!(*e < 0.05, "frame error {e} (all: {errors:?})");
+        assert!(*e < 0.018, "frame error {e} (all: {errors:?})");
     }
 }
 
 /// The same on the GPU (lavapipe, validation on; 32 bins, elements 0.5) for two animated
-/// frames. Measured: 0.0142 and 0.0138, of which 0.015 is the bounded mesh's hierarchy against
+/// frames. Measured: 0.0141 and 0.0138, of which 0.015 is the bounded mesh's hierarchy against
 /// the still scene's at these coarse settings (0.016 at rest on the CPU); against the bounded
-/// scene at that time 0.0006 warm, 0.0108 cold.
+/// scene at that time 0.0006 warm, 0.0108 cold. Bound 3× the measured.
 #[test]
 fn gpu_frames_match_render_at_their_time() {
     let o = options(BackendKind::Gpu);
     let errors = frames_against_scratch(&o, 3, 6.0);
     for e in &errors {
-        assert!(*e < 0.05, "frame error {e} (all: {errors:?})");
+        assert!(*e < 0.042, "frame error {e} (all: {errors:?})");
     }
     common::assert_clean(o.context.as_ref().unwrap());
 }
@@ -207,7 +207,8 @@ fn bounded_updates_do_not_relink() {
         rmse_over_mean(&cold, &converged),
     );
     println!("t = 1.3 against the same links converged: warm start {w:.4}, cold start {c:.4}");
-    assert!(w < 0.05 && c > 2.0 * w, "warm {w}, cold {c}");
+    // Measured: warm 0.0005, cold 0.0146; the warm bound 3× the measured.
+    assert!(w < 0.0015 && c > 2.0 * w, "warm {w}, cold {c}");
     // A host's pose outside the keyframes: prepared anew for it.
     let m = scene.objects[1].transform * DMat4::from_translation(DVec3::new(0.0, 0.2, 0.0));
     engine.set_object_transform(1, m).unwrap();
@@ -296,6 +297,7 @@ fn gpu_rescales_the_held_solution_when_a_light_brightens() {
         .unwrap();
     let e = rmse_over_mean(&frame, &scratch.image);
     println!("scale {before} -> {after}: RMSE/mean {e:.4} against a fresh render");
+    // Measured 0.0208 (the rescaled float16 solution's rounding); bound 2.4× that.
     assert!(e < 0.05, "{e}");
     common::assert_clean(o.context.as_ref().unwrap());
 }
@@ -335,7 +337,8 @@ fn gpu_light_changing_its_views_matches_a_fresh_render() {
         .unwrap();
     let e = rmse_over_mean(&frame, &scratch.image);
     println!("point light to spot: RMSE/mean {e:.4} against a fresh render");
-    assert!(e < 0.05, "{e}");
+    // Measured 0.0106; bound 3× that.
+    assert!(e < 0.032, "{e}");
     common::assert_clean(o.context.as_ref().unwrap());
 }
 
@@ -423,6 +426,7 @@ fn host_moves_lights_and_refuses_fixed_objects() {
         println!(
             "{backend:?}: point light moved by 0.32: RMSE/mean {e:.4} after 4 warm-started iterations"
         );
-        assert!(e < 0.05, "{backend:?}: {e}");
+        // Measured: CPU 0.0021, GPU 0.0017; bound 3× the larger.
+        assert!(e < 0.0065, "{backend:?}: {e}");
     }
 }

@@ -28,10 +28,10 @@ use std::time::Instant;
 /// links, linking 0.65 / 0.7 / 1.05 / 1.5 s.
 pub const SAMPLES_PER_SEGMENT: usize = 8;
 
+/// [`Bound::node_group`] of a cluster over more than one group (a top cluster).
+pub use crate::meshed::MIXED;
 /// [`Bound::node_group`] of a static node.
 pub use crate::meshed::STATIC;
-/// [`Bound::node_group`] of a cluster over more than one group (a top cluster).
-pub const MIXED: u32 = u32::MAX;
 
 /// What moves in a system linked for its whole motion, and how.
 #[derive(Debug, Clone)]

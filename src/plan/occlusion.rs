@@ -16,10 +16,9 @@ use glam::DVec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-/// Distances to a plane below this fraction of the scene's size count as on the plane: float32
-/// OBJ coordinates (6e-8 relative) make flat quads and tessellated spheres that far from exact, and
-/// a sliver that thin cannot occlude anything visible.
-pub const TOLERANCE: f64 = 1e-6;
+/// Distances to a plane below this fraction of the scene's size count as on the plane
+/// ([`crate::solids::TOLERANCE`], the stage below, judges solids with it too).
+pub use crate::solids::TOLERANCE;
 
 /// Triangle pairs examined at most before giving up (undecided keeps antiradiance).
 pub const PAIR_BUDGET: u64 = 400_000_000;
