@@ -26,6 +26,7 @@
 #define AR_BINDING_COMBOS 14
 #define AR_BINDING_LOBE_BINS 15
 #define AR_BINDING_LINKS 16
+#define AR_BINDING_ENVIRONMENT 17
 
 // The glossy lobes' incident-bin lists are per cell of a grid this much finer (per side) than
 // the bins' (src/gpu/pack.rs LOBE_REFINE).

@@ -16,6 +16,7 @@ layout(binding = AR_BINDING_IRRADIANCE_T) uniform sampler2D irradiance_t;
 layout(binding = AR_BINDING_ATTR_NORMAL_AREA) uniform sampler2D attr_normal_area;
 layout(binding = AR_BINDING_ATTR_LEAF) uniform sampler2D attr_leaf;
 layout(binding = AR_BINDING_DIRECT) uniform sampler2D direct;
+layout(binding = AR_BINDING_ENVIRONMENT) uniform sampler2D environment;
 layout(binding = AR_BINDING_LOBE_NORM) uniform sampler2D lobe_norm;
 layout(std430, binding = AR_BINDING_MATERIALS) readonly buffer Materials { Material materials[]; };
 layout(std430, binding = AR_BINDING_BIN_CENTERS) readonly buffer BinCenters { vec4 centers[]; };
@@ -25,12 +26,12 @@ layout(std430, binding = AR_BINDING_LOBE_BINS) readonly buffer LobeBins { uint l
 layout(location = 0) out vec4 out_ex;
 layout(location = 1) out vec4 out_total;
 
-// Incident radiance the leaf reflects and turns into antiradiance (links + environment). Push
-// leaves it in the L_push image at even depths and in the L_in image at odd ones (`odd`).
+// Incident radiance the leaf reflects and turns into antiradiance (from links; the environment
+// comes shadowed, as a first bounce, src/frame/environment.rs). Push leaves it in the L_push
+// image at even depths and in the L_in image at odd ones (`odd`).
 vec3 ar_lt(uint row, uint bin, bool odd) {
     ivec2 t = ar_in_texel(row, bin);
-    vec3 l = odd ? texelFetch(l_in, t, 0).rgb : texelFetch(l_push, t, 0).rgb;
-    return AR_ENVIRONMENT ? l + pc.environment.rgb : l;
+    return odd ? texelFetch(l_in, t, 0).rgb : texelFetch(l_push, t, 0).rgb;
 }
 
 void ar_local() {
@@ -88,7 +89,9 @@ void ar_local() {
                 }
                 r_t += mat.ks_ns.rgb * scale * glossy;
             }
-            tot = base * r_t;
+            // The shadowed environment's first bounce, reflected once: shown and sent.
+            vec3 sky = AR_ENVIRONMENT ? texelFetch(environment, p, 0).rgb : vec3(0.0);
+            tot = base * r_t + sky;
             vec3 ke = AR_EMISSION ? mat.ke.rgb * pc.environment.a : vec3(0.0);
             // Light arriving at the back in bin j is blocked: antiradiance out the front.
             // Not on a closed solid's surface (src/solids.rs): attr_leaf z is 2 where it blocks.
@@ -96,7 +99,7 @@ void ar_local() {
             // The first bounce of direct light, reflected once for the whole solve
             // (src/solver/local.rs direct_exitant), adds to I_ex only.
             vec3 first = AR_DIRECT ? texelFetch(direct, p, 0).rgb : vec3(0.0);
-            ex = base * (r_t + ke - blocked) + first;
+            ex = base * (r_t + ke - blocked) + first + sky;
         }
     } else if (cj < 0.0) {
         if (AR_MODE == AR_MODE_REFLECT) {

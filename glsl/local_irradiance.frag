@@ -1,7 +1,7 @@
 #version 450
-// Local pass, step 1: each leaf's irradiance from links + environment, one texel per row of the
-// irradiance image (direct light's first bounce is a table computed once, src/solver/local.rs
-// direct_exitant).
+// Local pass, step 1: each leaf's irradiance from links, one texel per row of the irradiance
+// image (the first bounces of direct light and of the shadowed environment are tables computed
+// once, src/solver/local.rs direct_exitant).
 #include "common.glsl"
 
 layout(binding = AR_BINDING_L_PUSH) uniform sampler2D l_push;
@@ -26,7 +26,7 @@ void main() {
             float wt = cos_l * pc.omega * c;
             ivec2 t = ar_in_texel(row, l);
             vec3 lt = odd ? texelFetch(l_in, t, 0).rgb : texelFetch(l_push, t, 0).rgb;
-            st += (AR_ENVIRONMENT ? lt + pc.environment.rgb : lt) * wt;
+            st += lt * wt;
         }
     }
     e_t = vec4(ar_store(st), 0.0);

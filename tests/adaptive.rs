@@ -565,7 +565,9 @@ fn a_planned_solver_refuses_sources_it_was_not_planned_for() {
         },
     )
     .unwrap();
-    assert!(gpu.set_environment(glam::DVec3::splat(0.1)).is_err());
+    assert!(gpu
+        .set_environment(&sys, glam::DVec3::splat(0.1), None)
+        .is_err());
     let t = antiradiance::solver::Table::zeros(sys.rows(), sys.bins.count);
     assert!(gpu.set_direct(&sys, &t).is_err());
 }

@@ -182,8 +182,14 @@ fn compare(
         },
     )
     .unwrap();
-    cpu.set_environment(scene.environment);
-    gpu.set_environment(scene.environment).unwrap();
+    let sky = antiradiance::frame::environment::shadowed(
+        &sys,
+        scene.environment,
+        &antiradiance::raycast::RayCaster::new(&sys),
+    );
+    cpu.set_environment(sky.clone());
+    gpu.set_environment(&sys, scene.environment, sky.as_ref())
+        .unwrap();
     if direct {
         // A synthetic direct-light table: light from one side of the scene.
         cpu.set_direct(|li, b| {
@@ -571,7 +577,11 @@ fn embeds_in_a_host_device_and_command_buffer() {
     assert!(!cpu.emission && !prep.maps.data.is_empty());
     let direct = antiradiance::frame::lights::direct_in_table(sys, &prep.lights, &prep.maps);
     cpu.state.set_direct_in(sys, Some(direct));
-    cpu.set_environment(scene.environment);
+    cpu.set_environment(antiradiance::frame::environment::shadowed(
+        sys,
+        scene.environment,
+        &antiradiance::raycast::RayCaster::new(sys),
+    ));
     cpu.solve(Scheme::Symmetric, 3, 4);
     let ex = worst_relative(sys, &cpu.i_ex, &cpu.i_ex, &gpu_ex, false, 0.0);
     println!("embedded solve (float32): worst {:.2e}", ex.0);

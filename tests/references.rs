@@ -444,20 +444,21 @@ fn dragon_room_at_low_resolution() {
 }
 
 /// The bundled breakfast room (issue 35: 269,538 triangles as converted from its Mitsuba file,
-/// fitted to the link budget at τ 16) lit by its sun alone, 32×18: the sunlit stripes through
-/// the blinds and the light they bounce. With its sky on, the frame is 1.9× too bright on average
-/// (the sky's light through the walls is not cancelled at this link mesh; README "Real
-/// scenes"): no bound here holds that, so the sky is turned off. Measured: relative RMSE 0.619
-/// (CPU and GPU; most of it the stripes' edges, which the raster shadow maps and the path
-/// tracer's rays cut differently at this size, and the reference's noise, 0.116), mean −3.2%,
-/// indirect light 0.61, the 266 indirect-only pixels 27.5% off at the median; GPU vs CPU 2.0e-2.
-/// Without antiradiance: 0.678, mean +11%, indirect light 2.42, median 126%.
+/// fitted to the link budget at τ 16) lit by its sun and its sky, 32×18: the sunlit stripes
+/// through the blinds, the sky through the windows (shadowed by rays,
+/// `frame::environment`) and the light they bounce. Measured: relative RMSE 0.559 on both
+/// backends (the reference's noise 0.106; most of the rest the stripes' edges, which the raster
+/// shadow maps and the path tracer's rays cut differently at this size), mean −4.0%, indirect
+/// light 0.564, the 76 indirect-only pixels 36% / 34% off at the median; GPU vs CPU 8.8e-2, of
+/// it one pixel that sees the sky between two slats in one frame and not in the other (−75%).
+/// With the sky carried unoccluded into the room and cancelled by antiradiance, as before, the
+/// frame was 1.9× too bright. Bounds 1.3–1.5× the measured (the stripes move with any change
+/// of the shadow maps).
 #[test]
-fn breakfast_room_in_sunlight_at_low_resolution() {
+fn breakfast_room_at_low_resolution() {
     let mut s =
         load_scene(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/breakfast-room.toml"))
             .unwrap();
-    s.environment = DVec3::ZERO;
     s.camera.width = 32;
     s.camera.height = 18;
     let truth = path_traced(&s, 1024);
@@ -465,9 +466,9 @@ fn breakfast_room_in_sunlight_at_low_resolution() {
         rel_rmse: 0.75,
         mean_bias: 0.06,
         indirect_rmse: 0.75,
-        indirect_median: Some(0.4),
-        gpu_vs_cpu: 4e-2,
-        gpu_vs_cpu_f16: 9e-2,
+        indirect_median: Some(0.5),
+        gpu_vs_cpu: 0.13,
+        gpu_vs_cpu_f16: 0.13,
     };
-    check("breakfast room, sun", &s, &truth, &bounds);
+    check("breakfast room", &s, &truth, &bounds);
 }

@@ -85,9 +85,14 @@ impl Backend for CpuBackend {
         let direct = (!prep.lights.is_empty())
             .then(|| direct_in_table(&prep.system, &prep.lights, &prep.maps));
         let state = self.state.as_mut().expect("state present");
-        state.environment = prep.scene.environment;
         state.set_direct_in(&prep.system, direct);
         self.time("direct", t);
+        let t = Instant::now();
+        let sky =
+            crate::frame::environment::shadowed(&prep.system, prep.scene.environment, &self.caster);
+        let state = self.state.as_mut().expect("state present");
+        state.set_environment_in(&prep.system, sky);
+        self.time("environment", t);
         Ok(())
     }
 

@@ -110,9 +110,19 @@ impl GpuBackend {
         )
     }
 
-    /// Sets the environment and direct light on the solver.
+    /// Sets the environment (shadowed by rays on the host) and direct light on the solver.
     fn set_sources(&mut self, prep: &Prepared) -> Result<()> {
-        self.solver.set_environment(prep.scene.environment)?;
+        let env = prep.scene.environment;
+        let sky = (env != glam::DVec3::ZERO).then(|| {
+            let t = std::time::Instant::now();
+            let caster = crate::raycast::RayCaster::new(&prep.system);
+            let sky = crate::frame::environment::shadowed(&prep.system, env, &caster);
+            self.pending
+                .push(("environment".into(), t.elapsed().as_secs_f64() * 1e3));
+            sky
+        });
+        self.solver
+            .set_environment(&prep.system, env, sky.flatten().as_ref())?;
         if let Some(d) = &self.direct {
             self.solver.set_direct(&prep.system, d)?;
         }

@@ -6,6 +6,7 @@ pub mod camera;
 pub mod cpu;
 pub mod edges;
 pub mod emitters;
+pub mod environment;
 pub mod image;
 pub mod lights;
 pub mod shading;

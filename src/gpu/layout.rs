@@ -199,7 +199,7 @@ pub mod binding {
     pub const L_IN: u32 = 3;
     /// Pushed incident radiance.
     pub const L_PUSH: u32 = 4;
-    /// Irradiance from links and environment, one texel per row.
+    /// Irradiance from links, one texel per row.
     pub const IRRADIANCE_T: u32 = 5;
     /// Attributes: normal (rgb), area (a).
     pub const ATTR_NORMAL_AREA: u32 = 6;
@@ -225,8 +225,11 @@ pub mod binding {
     pub const LOBE_BINS: u32 = 15;
     /// Link records (storage: [`super::GpuLink`]), pulled by the global pass's vertex index.
     pub const LINKS: u32 = 16;
+    /// The leaves' first bounce of the shadowed environment per bin
+    /// ([`crate::frame::environment`]; 1×1 without an environment).
+    pub const ENVIRONMENT: u32 = 17;
     /// Number of bindings.
-    pub const COUNT: u32 = 17;
+    pub const COUNT: u32 = 18;
     /// Storage-buffer bindings (the rest are combined image samplers).
     pub const BUFFERS: [u32; 5] = [MATERIALS, BIN_CENTERS, COMBOS, LOBE_BINS, LINKS];
 }

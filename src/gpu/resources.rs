@@ -37,7 +37,7 @@ resource_set! {
         pub l_push,
         /// Display intensity.
         pub i_total,
-        /// Irradiance from links + environment (one texel per row).
+        /// Irradiance from links (one texel per row).
         pub irradiance_t,
         /// Normal and area per row.
         pub attr_normal_area,
@@ -50,6 +50,9 @@ resource_set! {
         pub direct,
         /// Lobe factors per glossy leaf and incident bin (1×1 placeholder without glossy leaves).
         pub lobe_norm,
+        /// The leaves' first bounce of the shadowed environment (zero until set; 1×1
+        /// placeholder for scenes without an environment).
+        pub environment,
     }
 }
 
@@ -153,7 +156,7 @@ impl SolverImages<ImageDesc> {
             l_in: img("L_in", iw, ih, accum_format, Purpose::Tables),
             l_push: img("L_in pushed", iw, ih, accum_format, Purpose::Tables),
             i_total: table("I_total"),
-            irradiance_t: row("irradiance (links+environment)", format),
+            irradiance_t: row("irradiance (links)", format),
             attr_normal_area: row("attributes: normal, area", F32X4),
             attr_leaf: row("attributes: cos norm, material", F32X4),
             filter: img(
@@ -168,6 +171,11 @@ impl SolverImages<ImageDesc> {
                 table("direct light")
             } else {
                 img("direct light (none)", 1, 1, format, Purpose::Tables)
+            },
+            environment: if features.environment {
+                table("environment light")
+            } else {
+                img("environment light (none)", 1, 1, format, Purpose::Tables)
             },
             lobe_norm: if glossy_tables {
                 img(
@@ -374,9 +382,11 @@ impl Resources {
         images.attr_normal_area.upload(&pack::encode(f32x4, &na))?;
         images.attr_leaf.upload(&pack::encode(f32x4, &lf))?;
         images.filter.upload(as_bytes(&pack::filter_tables(sys)))?;
-        let d = &images.direct.desc;
-        let zero = vec![[0.0; 4]; (d.width * d.height) as usize];
-        images.direct.upload(&pack::encode(plan.format, &zero))?;
+        for im in [&mut images.direct, &mut images.environment] {
+            let d = &im.desc;
+            let zero = vec![[0.0; 4]; (d.width * d.height) as usize];
+            im.upload(&pack::encode(plan.format, &zero))?;
+        }
         let draw = &plan.draw;
         let b = &plan.buffers;
         let materials = pack::solver_materials(sys);
@@ -465,6 +475,7 @@ impl Resources {
                 binding::ATTR_NORMAL_AREA => &im.attr_normal_area,
                 binding::ATTR_LEAF => &im.attr_leaf,
                 binding::DIRECT => &im.direct,
+                binding::ENVIRONMENT => &im.environment,
                 binding::LOBE_NORM => &im.lobe_norm,
                 _ => im.leaf_ex(1 - p),
             }

@@ -93,6 +93,8 @@ pub struct GpuSolver {
     /// The leaves' first bounce of the direct light
     /// ([`crate::solver::local::direct_exitant`]), uploaded at the source scale.
     direct: Option<Table>,
+    /// The leaves' first bounce of the shadowed environment, uploaded at the source scale.
+    environment_ex: Option<Table>,
     /// The brightest direct incident radiance (it sets the source scale with the other sources).
     direct_max: f64,
     scale: f64,
@@ -237,6 +239,7 @@ impl GpuSolver {
             precision,
             environment: DVec3::ZERO,
             direct: None,
+            environment_ex: None,
             direct_max: 0.0,
             scale: 1.0,
             features,
@@ -279,15 +282,30 @@ impl GpuSolver {
         &self.features
     }
 
-    /// Constant environment radiance (creates antiradiance, like the CPU solver).
-    pub fn set_environment(&mut self, radiance: DVec3) -> Result<()> {
-        if radiance != DVec3::ZERO && !self.features.environment {
+    /// The constant environment: its radiance `radiance` (which sets the source scale with the
+    /// other sources) and its shadowed incident table for `sys`
+    /// ([`crate::frame::environment::environment_in_table`]; `None` without an environment),
+    /// whose first bounce is reflected here once on the host and added to I_ex and I_total by
+    /// every local pass, as the CPU solver does.
+    pub fn set_environment(
+        &mut self,
+        sys: &System,
+        radiance: DVec3,
+        table: Option<&Table>,
+    ) -> Result<()> {
+        if (radiance != DVec3::ZERO || table.is_some()) && !self.features.environment {
             return Err(Error::Invalid(
                 "an environment was set on a solver planned without one".into(),
             ));
         }
         self.environment = radiance;
-        self.update_scale()
+        self.environment_ex = table.map(|t| crate::solver::local::direct_exitant(sys, t));
+        let before = self.scale;
+        self.update_scale()?;
+        if self.scale == before {
+            self.upload_direct()?;
+        }
+        Ok(())
     }
 
     /// Direct incident radiance of `sys` per node and bin (reflected only), e.g. from

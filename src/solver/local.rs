@@ -112,7 +112,8 @@ pub fn local(s: &mut CpuSolver<'_>, mode: LocalMode) {
     let sys = s.sys;
     let s = &mut s.state;
     let m = sys.bins.count;
-    let (l_push, direct, env) = (&s.l_push, s.direct_ex.as_ref(), s.environment);
+    let (l_push, direct) = (&s.l_push, s.direct_ex.as_ref());
+    let env = s.environment_ex.as_ref();
     // Without antiradiance (nothing can occlude) the back bins stay zero.
     let antiradiance = s.antiradiance;
     let emission = s.emission;
@@ -132,8 +133,9 @@ pub fn local(s: &mut CpuSolver<'_>, mode: LocalMode) {
             let (n, c, a) = (leaf.normal, leaf.cos_norm, leaf.area);
             let lp = l_push.row(node);
             let dx = direct.map(|d| d.row(node));
+            let ev = env.map(|d| d.row(node));
             let r = Reflector::new(sys, slot as usize);
-            let lt = |l: usize| lp[l] + env;
+            let lt = |l: usize| lp[l];
             let e_t = r.irradiance(lt);
             for (j, dir) in sys.bins.centers.iter().enumerate() {
                 let cj = dir.dot(n);
@@ -143,7 +145,9 @@ pub fn local(s: &mut CpuSolver<'_>, mode: LocalMode) {
                     }
                     let base = a * c * cj;
                     let r_t = r.reflect(e_t, *dir, lt);
-                    tot[j] = base * r_t;
+                    // The shadowed environment's first bounce, reflected once: shown and sent.
+                    let sky = ev.map_or(DVec3::ZERO, |d| d[j]);
+                    tot[j] = base * r_t + sky;
                     // Light arriving at the back in bin j is blocked: antiradiance out the front.
                     let blocked = if antiradiance && leaf.blocks_back {
                         lt(j)
@@ -152,7 +156,7 @@ pub fn local(s: &mut CpuSolver<'_>, mode: LocalMode) {
                     };
                     // The first bounce of direct light ([`direct_exitant`]) adds to I_ex only.
                     let first = dx.map_or(DVec3::ZERO, |d| d[j]);
-                    ex[j] = base * (r_t + ke - blocked) + first;
+                    ex[j] = base * (r_t + ke - blocked) + first + sky;
                 } else if cj < 0.0 {
                     if mode == LocalMode::Reflect {
                         continue;

@@ -79,8 +79,13 @@ pub struct CpuState {
     direct_in: Option<Table>,
     /// Its first bounce ([`local::direct_exitant`]), which the local pass adds to I_ex.
     direct_ex: Option<Table>,
-    /// Constant environment radiance added to every leaf's incident radiance.
-    pub environment: DVec3,
+    /// Incident environment radiance per leaf and bin, shadowed
+    /// ([`crate::frame::environment::environment_in_table`]): reflected, creating no
+    /// antiradiance; set with [`CpuState::set_environment_in`].
+    environment_in: Option<Table>,
+    /// Its first bounce ([`local::direct_exitant`]), which the local pass adds to I_ex and
+    /// I_total (the frame draws no environment light per pixel).
+    environment_ex: Option<Table>,
     /// Relative change of `I_ex` at every iteration.
     pub residuals: Vec<f64>,
     /// Total exitant flux (W, mean of channels) of the leaves' front bins after every iteration.
@@ -103,6 +108,18 @@ impl CpuState {
         self.direct_in = direct;
     }
 
+    /// Sets the shadowed environment's incident table (or none) and computes its first bounce
+    /// once, as [`CpuState::set_direct_in`] does for direct light.
+    pub fn set_environment_in(&mut self, sys: &System, environment: Option<Table>) {
+        self.environment_ex = environment.as_ref().map(|t| local::direct_exitant(sys, t));
+        self.environment_in = environment;
+    }
+
+    /// The environment's first bounce per node and bin ([`CpuState::set_environment_in`]).
+    pub fn environment_exitant(&self) -> Option<&Table> {
+        self.environment_ex.as_ref()
+    }
+
     /// The direct incident table, per node and bin ([`CpuState::set_direct_in`]).
     pub fn direct_in(&self) -> Option<&Table> {
         self.direct_in.as_ref()
@@ -123,7 +140,8 @@ impl CpuState {
             i_total: Table::zeros(n, m),
             direct_in: None,
             direct_ex: None,
-            environment: DVec3::ZERO,
+            environment_in: None,
+            environment_ex: None,
             residuals: Vec::new(),
             energies: Vec::new(),
             propagations: 0,
@@ -170,9 +188,11 @@ impl<'a> CpuSolver<'a> {
         Self { sys, state }
     }
 
-    /// Sets the constant environment radiance (it creates antiradiance, §3.3).
-    pub fn set_environment(&mut self, radiance: DVec3) {
-        self.environment = radiance;
+    /// Sets the environment's shadowed incident radiance per leaf and bin
+    /// ([`crate::frame::environment::environment_in_table`]): reflected, no antiradiance (§3.3).
+    pub fn set_environment(&mut self, table: Option<Table>) {
+        let sys = self.sys;
+        self.state.set_environment_in(sys, table);
     }
 
     /// Hook for direct light (§3.3): `f(leaf_index, bin)` returns the incident radiance from
@@ -188,8 +208,8 @@ impl<'a> CpuSolver<'a> {
         self.state.set_direct_in(sys, Some(t));
     }
 
-    /// Initial state: emission, reflected direct light and environment, antiradiance of the
-    /// environment (a local pass with nothing gathered yet), then pull.
+    /// Initial state: emission, reflected direct light and environment (a local pass with
+    /// nothing gathered yet), then pull.
     pub fn initialize(&mut self) {
         self.l_in.data.fill(DVec3::ZERO);
         self.l_push.data.fill(DVec3::ZERO);
@@ -257,9 +277,12 @@ impl<'a> CpuSolver<'a> {
         for (b, c) in self.sys.bins.centers.iter().enumerate() {
             let cos = -c.dot(leaf.normal);
             if cos > 0.0 {
-                let mut l = self.l_push.row(n)[b] + self.environment;
-                if let Some(d) = &self.direct_in {
-                    l += d.row(n)[b];
+                let mut l = self.l_push.row(n)[b];
+                for t in [&self.direct_in, &self.environment_in]
+                    .into_iter()
+                    .flatten()
+                {
+                    l += t.row(n)[b];
                 }
                 e += l * cos;
             }

@@ -190,6 +190,7 @@ fn bindings_match_glsl() {
         ("COMBOS", binding::COMBOS),
         ("LOBE_BINS", binding::LOBE_BINS),
         ("LINKS", binding::LINKS),
+        ("ENVIRONMENT", binding::ENVIRONMENT),
     ];
     assert_eq!(consts.len() as u32, binding::COUNT);
     for (name, value) in consts {

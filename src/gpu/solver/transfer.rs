@@ -114,17 +114,21 @@ impl GpuSolver {
         Ok(self.unscale(t))
     }
 
-    /// Uploads the direct light's first bounce at the current source scale (no-op without one).
+    /// Uploads the first bounces of the direct light and of the environment at the current
+    /// source scale (each a no-op without it).
     pub(super) fn upload_direct(&mut self) -> Result<()> {
-        let Some(table) = &self.direct else {
-            return Ok(());
-        };
         let l = *self.res.layout();
-        let bytes = encode(
-            self.res.plan.format,
-            &l.from_table_scaled(table, self.scale),
-        );
-        self.res.images.direct.upload(&bytes)
+        let format = self.res.plan.format;
+        let im = &mut self.res.images;
+        for (table, image) in [
+            (&self.direct, &mut im.direct),
+            (&self.environment_ex, &mut im.environment),
+        ] {
+            if let Some(t) = table {
+                image.upload(&encode(format, &l.from_table_scaled(t, self.scale)))?;
+            }
+        }
+        Ok(())
     }
 
     /// Chooses the power-of-two source scale for the system's range, the environment and the
