@@ -50,6 +50,9 @@ pub struct GpuBackend {
     solver: GpuSolver,
     frame: GpuFrame,
     direct: Option<Table>,
+    /// The environment's shadowed incident table of the last light preparation (kept for a
+    /// solver made anew at another precision, [`Backend::widen`]).
+    sky: Option<Table>,
     tuning: GpuTuning,
     pending: Vec<(String, f64)>,
     /// After a follow that left every shadow view as it was: the maps' distances, reused
@@ -82,6 +85,7 @@ impl GpuBackend {
             solver,
             frame,
             direct: None,
+            sky: None,
             tuning,
             pending: Vec::new(),
             kept_maps: None,
@@ -113,16 +117,8 @@ impl GpuBackend {
     /// Sets the environment (shadowed by rays on the host) and direct light on the solver.
     fn set_sources(&mut self, prep: &Prepared) -> Result<()> {
         let env = prep.scene.environment;
-        let sky = (env != glam::DVec3::ZERO).then(|| {
-            let t = std::time::Instant::now();
-            let caster = crate::raycast::RayCaster::new(&prep.system);
-            let sky = crate::frame::environment::shadowed(&prep.system, env, &caster);
-            self.pending
-                .push(("environment".into(), t.elapsed().as_secs_f64() * 1e3));
-            sky
-        });
         self.solver
-            .set_environment(&prep.system, env, sky.flatten().as_ref())?;
+            .set_environment(&prep.system, env, self.sky.as_ref())?;
         if let Some(d) = &self.direct {
             self.solver.set_direct(&prep.system, d)?;
         }
@@ -263,6 +259,16 @@ impl Backend for GpuBackend {
 
     fn prepare_lights(&mut self, prep: &mut Prepared) -> Result<()> {
         self.direct = None;
+        // The sky's rays once per light preparation (the geometry may have moved).
+        let env = prep.scene.environment;
+        self.sky = None;
+        if env != glam::DVec3::ZERO {
+            let t = std::time::Instant::now();
+            let caster = crate::raycast::RayCaster::new(&prep.system);
+            self.sky = crate::frame::environment::shadowed(&prep.system, env, &caster);
+            self.pending
+                .push(("environment".into(), t.elapsed().as_secs_f64() * 1e3));
+        }
         let kept = self.kept_maps.take();
         if !prep.maps.views.is_empty() {
             match kept {
