@@ -445,8 +445,12 @@ fn report(st: &antiradiance::engine::RenderStats) {
         eprintln!("note: 0 iterations: the image shows emission and direct light only, no interreflection");
     }
     if let Some(e) = st.estimated_error {
+        let tail = match st.extrapolations {
+            0 => String::new(),
+            n => format!(", {n} tail extrapolation{}", if n == 1 { "" } else { "s" }),
+        };
         eprintln!(
-            "estimated error {e:.2e} ({} scheme, {} tables)",
+            "estimated error {e:.2e} ({} scheme, {} tables{tail})",
             st.scheme, st.precision
         );
     }

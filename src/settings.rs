@@ -84,6 +84,18 @@ pub enum Precision {
     #[value(skip)]
     F64,
 }
+impl Precision {
+    /// Unit roundoff of the format (half its spacing at 1): the relative change per iteration
+    /// below which the tables cannot resolve further progress.
+    pub fn unit_roundoff(self) -> f64 {
+        match self {
+            Self::F16 => 2f64.powi(-11),
+            Self::F32 => 2f64.powi(-24),
+            Self::F64 => 2f64.powi(-53),
+        }
+    }
+}
+
 spelled!(
     Precision,
     "precision",

@@ -65,6 +65,11 @@ pub trait Backend {
             "moving objects and lights need the antiradiance method".into(),
         ))
     }
+    /// Whether [`Backend::warm_start`] continues from any table of the system's shape (the
+    /// antiradiance backends): the drive loop's tail extrapolation needs it.
+    fn resumable(&self) -> bool {
+        false
+    }
     /// Continues from the solution the backend holds after it followed a move
     /// ([`Backend::follow`] returned true): the next iterations start from it (§3.3), as
     /// [`Backend::warm_start`] with the same table would, without handing it over.

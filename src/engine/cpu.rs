@@ -124,6 +124,10 @@ impl Backend for CpuBackend {
         Ok(figures)
     }
 
+    fn resumable(&self) -> bool {
+        true
+    }
+
     fn warm_start(&mut self, _: &Prepared, i_ex: &Table) -> Result<()> {
         let state = self.state.as_mut().expect("state present");
         state.i_ex = i_ex.clone();

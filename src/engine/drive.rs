@@ -5,6 +5,7 @@
 
 use super::backend::Backend;
 use super::prepared::Prepared;
+use super::tail::{Checked, Tail};
 use crate::error::{Error, Result};
 use crate::progress::Progress;
 use crate::scene::Scheme;
@@ -25,6 +26,8 @@ pub(crate) struct Outcome {
     pub scheme: Option<Scheme>,
     /// Estimated distance to the fixed point, relative (see [`Monitor::error_estimate`]).
     pub estimated_error: Option<f64>,
+    /// Tail extrapolations applied and kept ([`crate::solver::extrapolate`]).
+    pub extrapolations: usize,
 }
 
 /// Iterations per batch: one submission and one fence wait on the GPU per batch, the
@@ -57,6 +60,7 @@ pub(crate) fn drive(
     let batch = if every_iteration { 1 } else { BATCH };
     // Iterations to run without judging, after both schemes grew: the best iterate is re-run.
     let mut replay: Option<usize> = None;
+    let mut tail: Tail;
     progress.begin("iterations", monitor.limit as u64);
     'run: loop {
         solver.initialize(prep)?;
@@ -64,6 +68,11 @@ pub(crate) fn drive(
             initialized();
         }
         monitor.restart();
+        monitor.rounding = solver.precision().unit_roundoff();
+        // Frames after every iteration show the plain iteration; a replay re-runs it exactly.
+        tail = Tail::new(
+            settings.extrapolate && solver.resumable() && !every_iteration && replay.is_none(),
+        );
         let end = replay.unwrap_or(monitor.limit);
         if end == 0 {
             frame(0, solver)?;
@@ -94,11 +103,17 @@ pub(crate) fn drive(
                     decided = Some(verdict);
                 }
             }
+            if let Checked::Undone { at, why } = tail.check(solver, prep, &mut monitor)? {
+                out.fallbacks.push(why);
+                k = at;
+                continue;
+            }
             match decided {
                 None if replay.is_some() || k < end => {
                     if every_iteration && replay.is_none() {
                         frame(k, solver)?;
                     }
+                    tail.step(solver, prep, &mut monitor, k, end)?;
                 }
                 None | Some(Verdict::Done) | Some(Verdict::Continue) => {
                     frame(k, solver)?;
@@ -137,6 +152,7 @@ pub(crate) fn drive(
         frame(k, solver)?;
         break;
     }
+    out.extrapolations = tail.applied;
     progress.end();
     out.residuals = monitor.residuals.clone();
     out.energies = monitor.energies.clone();

@@ -307,6 +307,10 @@ impl Backend for GpuBackend {
         Ok(figures)
     }
 
+    fn resumable(&self) -> bool {
+        true
+    }
+
     fn warm_start(&mut self, prep: &Prepared, i_ex: &Table) -> Result<()> {
         self.solver.upload_i_ex(&prep.system, i_ex)
     }

@@ -15,6 +15,7 @@ pub mod motion;
 pub mod options;
 pub mod prepared;
 pub mod stats;
+mod tail;
 
 pub use backend::Backend;
 pub use drive::BATCH;
@@ -426,6 +427,7 @@ impl Engine {
             residuals: outcome.residuals,
             energies: outcome.energies,
             estimated_error: outcome.estimated_error,
+            extrapolations: outcome.extrapolations,
             fallbacks,
             warnings: outcome.warnings,
             method_report: self.backend.method_report(),

@@ -56,6 +56,9 @@ pub struct RenderStats {
     /// iteration ([`crate::solver::convergence::Monitor::error_estimate`]): the iteration error,
     /// not the error against the true answer (the discretization's own error is not in it).
     pub estimated_error: Option<f64>,
+    /// Tail extrapolations the solve applied and kept ([`crate::solver::extrapolate`]; only
+    /// where the iteration is stiff and one mode dominates).
+    pub extrapolations: usize,
     /// Departures from the requested configuration.
     pub fallbacks: Vec<String>,
     /// Things the user should know about the result (e.g. the iteration cap was reached).

@@ -317,4 +317,6 @@ pub struct SolverDesc {
     pub emitter_samples: Option<i64>,
     /// Group the small triangles of dense meshes into face clusters (default true).
     pub face_clusters: Option<bool>,
+    /// Sum the geometric tail of a stiff iteration in one step (default true).
+    pub extrapolate: Option<bool>,
 }

@@ -219,6 +219,9 @@ pub struct SolverSettings {
     /// Whether small triangles of dense meshes are grouped into face clusters, one leaf each
     /// ([`crate::clusters`]); off, every input triangle is at least one leaf.
     pub face_clusters: bool,
+    /// Whether a stiff iteration's geometric tail is summed in one step where one mode
+    /// dominates ([`crate::solver::extrapolate`]); off, plain iteration only.
+    pub extrapolate: bool,
 }
 
 /// Most emitter samples (each has six shadow-map faces).
@@ -241,6 +244,7 @@ impl Default for SolverSettings {
             emitter_samples: None,
             iterations_per_frame: 4,
             face_clusters: true,
+            extrapolate: true,
         }
     }
 }

@@ -138,6 +138,7 @@ pub fn solver_settings(s: &SolverDesc, path: &Path) -> Result<SolverSettings> {
             path,
         )?,
         face_clusters: s.face_clusters.unwrap_or(d.face_clusters),
+        extrapolate: s.extrapolate.unwrap_or(d.extrapolate),
         emitter_samples: match s.emitter_samples {
             None => d.emitter_samples,
             Some(n) if (0..=super::MAX_EMITTER_SAMPLES as i64).contains(&n) => Some(n as usize),

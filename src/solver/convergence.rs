@@ -110,7 +110,8 @@ pub enum Verdict {
     Continue,
     /// The fixed count is done, or the residual target was reached.
     Done,
-    /// The iteration cap was reached above the residual target; the sentence says so.
+    /// Stopped above the residual target (the iteration cap, or changes at the tables'
+    /// rounding); the sentence says which.
     Cap(String),
     /// The iteration grows or stalls instead of converging; the sentence says how.
     Diverging(String),
@@ -129,6 +130,15 @@ pub struct Monitor {
     pub changes: Vec<f64>,
     /// Exitant flux after every iteration.
     pub energies: Vec<f64>,
+    /// Index of the first change after the last tail extrapolation (0 without one): earlier
+    /// changes belong to another trajectory and are not compared with later ones.
+    epoch: usize,
+    /// The dominant contraction ratio measured before the last extrapolation: what the error
+    /// left in that mode still contracts at, whatever the few changes since suggest.
+    dominant: Option<f64>,
+    /// Unit roundoff of the tables being iterated ([`crate::Precision::unit_roundoff`]): the
+    /// relative change below which a change is rounding, not progress. f64 by default.
+    pub rounding: f64,
 }
 
 /// Iterations before growth is judged (light reaching new elements legitimately grows the change).
@@ -155,14 +165,52 @@ impl Monitor {
             residuals: Vec::new(),
             changes: Vec::new(),
             energies: Vec::new(),
+            epoch: 0,
+            dominant: None,
+            rounding: f64::EPSILON / 2.0,
         }
     }
 
     /// Forgets the history (after a restart with another scheme or precision).
     pub fn restart(&mut self) {
-        self.residuals.clear();
-        self.changes.clear();
-        self.energies.clear();
+        self.truncate(0);
+    }
+
+    /// Forgets the iterations after the first `n` (an extrapolation undone).
+    pub fn truncate(&mut self, n: usize) {
+        self.residuals.truncate(n);
+        self.changes.truncate(n);
+        self.energies.truncate(n);
+        if self.epoch > n {
+            self.epoch = 0;
+            self.dominant = None;
+        }
+    }
+
+    /// Notes that the state was just extrapolated along a mode contracting at `q`
+    /// ([`crate::solver::extrapolate`]): the next changes start a new trajectory.
+    pub fn extrapolated(&mut self, q: f64) {
+        self.epoch = self.changes.len();
+        self.dominant = Some(q);
+    }
+
+    /// Where the changes of the current trajectory begin (after the last extrapolation).
+    pub fn epoch(&self) -> usize {
+        self.epoch
+    }
+
+    /// The contraction ratio over the last (up to) eight changes of the current trajectory.
+    pub fn contraction(&self) -> Option<f64> {
+        let n = self.changes.len();
+        let w = n.checked_sub(1 + self.epoch)?.min(8);
+        if w == 0 || self.changes[n - 1 - w] <= 0.0 {
+            return None;
+        }
+        Some(
+            (self.changes[n - 1] / self.changes[n - 1 - w])
+                .powf(1.0 / w as f64)
+                .min(0.999_999),
+        )
     }
 
     /// Estimated distance to the fixed point relative to the solution: the last residual times
@@ -175,18 +223,20 @@ impl Monitor {
     /// iterations removes and this estimate does not see: a closed box at ρ = 0.999 whose
     /// transport lost 2.7% per bounce once "converged" to an estimated error under 1e-4 at a
     /// mean of 36 instead of 1000.
+    ///
+    /// A residual below the tables' rounding is counted as that rounding: a change of zero in
+    /// float32 at q = 0.9999 says that the increments fell below the format's resolution, not
+    /// that the iterate is exact (the rounding, amplified by 1/(1 − q), is then the error).
     pub fn error_estimate(&self) -> Option<f64> {
-        let n = self.changes.len();
-        let r = *self.residuals.last()?;
-        // q over up to eight iterations: float16 rounding makes single ratios noisy.
-        let w = (n - 1).min(8);
-        if w == 0 || self.changes[n - 1 - w] <= 0.0 {
-            return Some(r);
-        }
-        let q = (self.changes[n - 1] / self.changes[n - 1 - w])
-            .powf(1.0 / w as f64)
-            .min(0.999_999);
-        Some(r * q.max(0.0) / (1.0 - q))
+        let r = self.residuals.last()?.max(self.rounding);
+        // After an extrapolation, what is left in the dominant mode still contracts at its
+        // measured ratio, and no mode is slower: a faster-looking window is the other modes dying
+        // out, a slower-looking one rounding noise.
+        let q = self.dominant.or_else(|| self.contraction());
+        Some(match q {
+            Some(q) => r * q.max(0.0) / (1.0 - q),
+            None => r,
+        })
     }
 
     /// Records an iteration and says what to do next.
@@ -205,6 +255,11 @@ impl Monitor {
                 let e = self.error_estimate().unwrap_or(f64::INFINITY);
                 if e <= t {
                     Verdict::Done
+                } else if k > WARMUP && self.at_rounding() {
+                    Verdict::Cap(format!(
+                        "stopped at iteration {k}: the change per iteration ({:.1e}) is at the tables' rounding ({:.1e}), which leaves an estimated error of {e:.2e} above the tolerance {t:.1e}: more iterations cannot reduce it at this precision",
+                        c.relative, self.rounding
+                    ))
                 } else if k >= self.limit {
                     Verdict::Cap(format!(
                         "stopped at the iteration cap of {k} (solver.max_iterations) with an estimated error of {e:.2e} (residual {:.2e}), above the tolerance {t:.1e}",
@@ -215,6 +270,21 @@ impl Monitor {
                 }
             }
         }
+    }
+
+    /// Whether the changes are the tables' rounding: a relative change within 4 unit roundoffs,
+    /// or within 64 while no longer falling over the last eight iterations.
+    fn at_rounding(&self) -> bool {
+        let k = self.changes.len();
+        let (r, u) = (self.residuals[k - 1], self.rounding);
+        if r <= 4.0 * u {
+            return true;
+        }
+        if r > 64.0 * u || k < self.epoch + 8 {
+            return false;
+        }
+        let best = |a: usize, b: usize| self.changes[a..b].iter().cloned().fold(f64::MAX, f64::min);
+        best(k - 4, k) >= best(k - 8, k - 4)
     }
 
     fn diverging(&self) -> Option<String> {
@@ -254,6 +324,7 @@ impl Monitor {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::Precision;
 
     fn feed(m: &mut Monitor, changes: &[f64]) -> Verdict {
         let mut v = Verdict::Continue;
@@ -332,5 +403,42 @@ mod tests {
             1.0,
         );
         assert!(matches!(v, Verdict::Diverging(s) if s.contains("non-finite")));
+    }
+
+    #[test]
+    fn after_an_extrapolation_the_dominant_ratio_sets_the_estimate() {
+        let mut m = Monitor::new(&settings(Some(1e-9)));
+        feed(
+            &mut m,
+            &(0..20).map(|k| 0.99f64.powi(k)).collect::<Vec<_>>(),
+        );
+        m.extrapolated(0.99);
+        // One tiny change after the jump: a plain residual test would stop; the estimate keeps
+        // the dominant mode's amplification (q/(1 − q) = 99), even when the next changes
+        // look faster or (rounding) slower.
+        feed(&mut m, &[1e-6, 1e-7, 1e-7]);
+        let r = *m.residuals.last().unwrap();
+        let e = m.error_estimate().unwrap();
+        assert!((e / r - 99.0).abs() < 1e-6, "{e} vs {r}");
+        m.truncate(20);
+        assert_eq!(m.epoch(), 20);
+        m.truncate(10);
+        assert_eq!(m.epoch(), 0);
+    }
+
+    #[test]
+    fn changes_at_the_tables_rounding_stop_the_run_and_say_so() {
+        let mut m = Monitor::new(&settings(Some(1e-8)));
+        m.rounding = Precision::F32.unit_roundoff();
+        m.limit = 1000;
+        // Converging at 0.999, then flat at 2e-7 relative (float32 noise): the estimate stays
+        // above the tolerance, and the run stops there instead of at the cap.
+        let mut changes: Vec<f64> = (0..10).map(|k| 1e-5 * 0.999f64.powi(k)).collect();
+        changes.extend([2e-6; 12]);
+        match feed(&mut m, &changes) {
+            Verdict::Cap(s) => assert!(s.contains("rounding"), "{s}"),
+            v => panic!("{v:?}"),
+        }
+        assert!(m.residuals.len() < changes.len());
     }
 }

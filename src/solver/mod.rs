@@ -7,6 +7,7 @@
 //! `-I_A` in its back bins (Fig. 6a), so one table carries radiance and antiradiance.
 
 pub mod convergence;
+pub mod extrapolate;
 pub mod global;
 pub mod local;
 pub mod pull;
