@@ -100,6 +100,8 @@ struct ShadowView {
     vec4 origin;   // w: 1 orthographic, 0 perspective
     vec4 forward;  // w: half side / tan(fov/2)
     uvec4 atlas;   // its map in the atlas: x0, y0, side
+    vec4 right;    // unit image right (texel rays of the receiver-plane lookup)
+    vec4 up;       // unit image up
 };
 
 struct Light {

@@ -22,10 +22,10 @@ layout(binding = AR_FRAME_GBUF_NORMAL) uniform sampler2D gbuf_normal;
 layout(binding = AR_FRAME_SPLAT) uniform sampler2D splat_sum;
 layout(std430, binding = AR_FRAME_EMITTERS) readonly buffer Emitters { EmitterTriangle emitter_tris[]; };
 
-const float AR_SHADOW_NORMAL_OFFSET = 1.5;
-const float AR_SHADOW_CONSTANT_BIAS = 1.0;
-const float AR_SHADOW_SLOPE_BIAS = 1.5;
-const float AR_SHADOW_FILTER_RADIUS = 1.5;
+const float AR_SHADOW_DEPTH_BIAS = 0.1;
+const float AR_SHADOW_RELATIVE_BIAS = 1e-5;
+const float AR_SHADOW_GRAZING = 0.001;
+const float AR_SHADOW_FILTER_RADIUS = 1.0;
 const uint AR_MODE_VERTEX = 1u;
 
 // The G-buffer's position w (glsl/gbuffer.frag): 0 where nothing was hit, else the leaf slot + 1,
@@ -184,15 +184,11 @@ float ar_visibility(Light l, vec3 p, vec3 n, float cosv) {
     ivec2 base = ivec2(v.atlas.xy);
     bool ortho = v.origin.w > 0.5;
     float texel = 2.0 * v.forward.w * (ortho ? 1.0 : length(p - v.origin.xyz)) / float(s);
-    // Offset toward the light, not along n (shadow.rs NORMAL_OFFSET: no lift over edges).
-    vec3 toward = ortho ? -v.forward.xyz : normalize(v.origin.xyz - p);
-    vec3 q = p + toward * (AR_SHADOW_NORMAL_OFFSET * texel);
-    vec4 c = v.view_proj * vec4(q, 1.0);
+    vec4 c = v.view_proj * vec4(p, 1.0);
     float tx = (c.x / c.w + 1.0) * 0.5 * float(s) - 0.5;
     float ty = (c.y / c.w + 1.0) * 0.5 * float(s) - 0.5;
-    float tanv = min(sqrt(max(1.0 - cosv * cosv, 0.0)) / max(cosv, 1e-6), 8.0);
-    float dist = ortho ? dot(q - v.origin.xyz, v.forward.xyz) : length(q - v.origin.xyz);
-    float d = dist - texel * (AR_SHADOW_CONSTANT_BIAS + AR_SHADOW_SLOPE_BIAS * tanv);
+    float own = ortho ? dot(p - v.origin.xyz, v.forward.xyz) : length(p - v.origin.xyz);
+    float bias = texel * AR_SHADOW_DEPTH_BIAS + abs(own) * AR_SHADOW_RELATIVE_BIAS;
     int x0 = int(floor(tx - AR_SHADOW_FILTER_RADIUS)) + 1;
     int y0 = int(floor(ty - AR_SHADOW_FILTER_RADIUS)) + 1;
     float lit = 0.0;
@@ -204,9 +200,16 @@ float ar_visibility(Light l, vec3 p, vec3 n, float cosv) {
             int kx = x0 + i;
             float wx = max(1.0 - abs(float(kx) - tx) / AR_SHADOW_FILTER_RADIUS, 0.0);
             float w = wx * wy;
-            ivec2 t = base + ivec2(clamp(kx, 0, s - 1), clamp(ky, 0, s - 1));
+            ivec2 k = ivec2(clamp(kx, 0, s - 1), clamp(ky, 0, s - 1));
+            // shadow.rs plane_distance: the receiver's plane under this tap's texel.
+            vec2 ndc = (vec2(k) + 0.5) / float(s) * 2.0 - 1.0;
+            vec3 side = v.right.xyz * (ndc.x * v.forward.w) - v.up.xyz * (ndc.y * v.forward.w);
+            vec3 o = ortho ? v.origin.xyz + side : v.origin.xyz;
+            vec3 ray = ortho ? v.forward.xyz : normalize(v.forward.xyz + side);
+            float dn = dot(ray, n);
+            float d = min(dn > -AR_SHADOW_GRAZING ? own : dot(p - o, n) / dn, own) - bias;
             total += w;
-            if (d <= texelFetch(shadow_map, t, 0).r) {
+            if (w > 0.0 && d <= texelFetch(shadow_map, base + k, 0).r) {
                 lit += w;
             }
         }

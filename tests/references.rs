@@ -420,9 +420,12 @@ fn mnroom_at_low_resolution() {
 
 /// The bundled dragon room (issue 35: a scanned mesh of 100,000 triangles, without normals, in a
 /// closed room), at its own settings, 40×30: its triangles in face clusters (7,786 leaves, 2.36M
-/// links). Measured: relative RMSE 0.0965 (CPU) / 0.0941 (GPU), mean −0.00% / −0.03%, indirect
-/// light 0.081; GPU vs CPU 4.3e-3 (float32 tables: the plan's range analysis). Without
-/// antiradiance: 0.528, mean +37%.
+/// links). Measured: relative RMSE 0.0918 (CPU) / 0.0893 (GPU), mean −2.0% / −2.0%, indirect
+/// light 0.086; GPU vs CPU 4.3e-3 (float32 tables: the plan's range analysis). Without
+/// antiradiance: 0.528, mean +37%. Before the receiver-plane shadow lookup (issue 36):
+/// 0.0965 / 0.0941, mean −0.00%, but its direct light alone was 0.91 relative RMSE from the
+/// path tracer's (leaks through the scan's contacts with the floor, +1.3% in the mean), now 0.17
+/// (−1.3%): the old mean was right by compensation.
 #[test]
 fn dragon_room_at_low_resolution() {
     let mut s =
@@ -433,7 +436,7 @@ fn dragon_room_at_low_resolution() {
     let bounds = Bounds {
         // The reference's noise (0.016 at 2048 spp) must stay under a fifth of the bound.
         rel_rmse: 0.12,
-        mean_bias: 0.02,
+        mean_bias: 0.03,
         indirect_rmse: 0.11,
         // Nine pixels only, too few for a median.
         indirect_median: None,

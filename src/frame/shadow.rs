@@ -14,18 +14,23 @@ use rayon::prelude::*;
 
 /// Value of a texel that sees no surface.
 pub const EMPTY: f32 = 3.0e38;
-/// Receiver offset toward the light, in texels (at the receiver's distance). Toward the light,
-/// not along the normal: a normal offset lifts the receiver over an occluder's edge (measured:
-/// the Cornell box's floor beside the short block 21% too bright in direct light with 128²
-/// emitter-sample maps), while a move along the light's own ray keeps the lookup texel and only
-/// shortens the compared distance.
-pub const NORMAL_OFFSET: f64 = 1.5;
-/// Constant depth bias, in texels.
-pub const CONSTANT_BIAS: f64 = 1.0;
-/// Slope-scaled bias, in texels per unit of tan(θ) (θ between normal and light), capped at 8.
-pub const SLOPE_BIAS: f64 = 1.5;
-/// Radius (texels) of the tent filter of the percentage-closer lookup.
-pub const FILTER_RADIUS: f64 = 1.5;
+/// Depth bias, in texels at the receiver, along the light's ray. The lookup compares each tap
+/// with the receiver's own plane at that tap's texel (receiver-plane depth), so a planar
+/// receiver matches its own map to rounding at any slope and needs no slope-scaled bias; what
+/// is left is this half texel (rounding of the map and of the plane, a mesh's curvature within a
+/// texel). Before, a fixed offset toward the light plus a slope-scaled bias of up to 13.5 texels
+/// lifted a receiver past any occluder that near: a band of light along every contact (a wall
+/// under a roof lit to 2 pixels below the roof at 256² maps, `tests/contact.rs`).
+pub const DEPTH_BIAS: f64 = 0.1;
+/// Relative depth bias: float32 map distances and the GPU's interpolated positions round at
+/// about 10⁻⁷ of the distance; this covers them at any scene scale.
+pub const RELATIVE_BIAS: f64 = 1e-5;
+/// Radius (texels) of the tent filter of the percentage-closer lookup: one texel, so a point
+/// more than one texel inside a shadow has every tap of non-zero weight inside it.
+pub const FILTER_RADIUS: f64 = 1.0;
+/// A tap whose texel ray meets the receiver's plane at a cosine below this (seen edge-on or
+/// from behind) is compared at the receiver point's own distance.
+const GRAZING: f64 = 1e-3;
 /// Spot lights wider than this use a cube map.
 const SPOT_SINGLE_VIEW_MAX_DEG: f64 = 75.0;
 
@@ -436,28 +441,22 @@ impl ShadowMaps {
         best
     }
 
-    /// Filtered fraction of light `light` reaching `p`, a surface point with unit normal `n`
-    /// facing the light, where `cos` is the cosine between `n` and the direction to the light.
-    pub fn visibility(&self, light: usize, p: DVec3, _n: DVec3, cos: f64) -> f64 {
+    /// Filtered fraction of light `light` reaching `p`, a surface point with unit (face)
+    /// normal `n` facing the light (`_cos`, the cosine to the light, is no longer needed: the
+    /// receiver's plane gives each tap its own depth).
+    pub fn visibility(&self, light: usize, p: DVec3, n: DVec3, _cos: f64) -> f64 {
         if self.data.is_empty() {
             return 1.0;
         }
         let vi = self.view_for(light, p);
         let view = &self.views[vi];
         let s = view.size as i64;
-        let texel = view.texel_size(p, view.size);
-        let toward = if view.ortho {
-            -view.forward
-        } else {
-            (view.origin - p).normalize_or_zero()
-        };
-        let q = p + toward * (NORMAL_OFFSET * texel);
-        let c = view.view_proj * q.extend(1.0);
+        let c = view.view_proj * p.extend(1.0);
         let (x, y) = (c.x / c.w, c.y / c.w);
         let tx = (x + 1.0) * 0.5 * s as f64 - 0.5;
         let ty = (y + 1.0) * 0.5 * s as f64 - 0.5;
-        let tan = ((1.0 - cos * cos).max(0.0).sqrt() / cos.max(1e-6)).min(8.0);
-        let d = view.distance(q) - texel * (CONSTANT_BIAS + SLOPE_BIAS * tan);
+        let own = view.distance(p);
+        let bias = view.texel_size(p, view.size) * DEPTH_BIAS + own.abs() * RELATIVE_BIAS;
         let base = &self.data[self.offsets[vi]..self.offsets[vi] + (s * s) as usize];
         let (mut lit, mut total) = (0.0, 0.0);
         let (x0, y0) = (
@@ -469,9 +468,15 @@ impl ShadowMaps {
             for kx in x0..x0 + 3 {
                 let wx = (1.0 - (kx as f64 - tx).abs() / FILTER_RADIUS).max(0.0);
                 let w = wx * wy;
-                let texel = base[(ky.clamp(0, s - 1) * s + kx.clamp(0, s - 1)) as usize];
+                if w <= 0.0 {
+                    continue;
+                }
+                let (i, j) = (kx.clamp(0, s - 1), ky.clamp(0, s - 1));
+                // Never deeper than the point itself: on a mesh rougher than a texel the plane
+                // says little beyond the point, and deeper taps see the surface behind anyway.
+                let d = view.plane_distance(p, n, own, i as u32, j as u32).min(own) - bias;
                 total += w;
-                if d <= texel as f64 {
+                if d <= base[(j * s + i) as usize] as f64 {
                     lit += w;
                 }
             }
@@ -481,6 +486,22 @@ impl ShadowMaps {
         } else {
             1.0
         }
+    }
+}
+
+impl ShadowView {
+    /// The distance this view's map would store at texel (`i`, `j`) for the plane through `p`
+    /// with unit normal `n` (receiver-plane depth); `own` (p's own distance) where the texel's
+    /// ray meets the plane edge-on or from behind.
+    pub fn plane_distance(&self, p: DVec3, n: DVec3, own: f64, i: u32, j: u32) -> f64 {
+        let (o, d) = self.texel_ray(i, j, self.size);
+        let dn = d.dot(n);
+        if dn > -GRAZING {
+            return own;
+        }
+        // Along the unit ray from the light (perspective) or from the near plane (orthographic):
+        // the distance the map stores in either case.
+        (p - o).dot(n) / dn
     }
 }
 
@@ -512,10 +533,10 @@ mod tests {
     fn glsl_uses_the_same_constants() {
         let glsl = include_str!("../../glsl/frame.glsl");
         for (name, v) in [
-            ("NORMAL_OFFSET", NORMAL_OFFSET),
-            ("CONSTANT_BIAS", CONSTANT_BIAS),
-            ("SLOPE_BIAS", SLOPE_BIAS),
+            ("DEPTH_BIAS", DEPTH_BIAS),
+            ("RELATIVE_BIAS", RELATIVE_BIAS),
             ("FILTER_RADIUS", FILTER_RADIUS),
+            ("GRAZING", GRAZING),
         ] {
             let line = format!("const float AR_SHADOW_{name} = {v:?};");
             assert!(glsl.contains(&line), "frame.glsl lacks `{line}`");

@@ -264,6 +264,11 @@ pub struct GpuShadowView {
     pub forward: [f32; 4],
     /// Its map in the atlas: first texel x, y, side, unused.
     pub atlas: [u32; 4],
+    /// Unit image right (xyz; w unused): with `up`, the rays through the texel centers that
+    /// the receiver-plane lookup intersects with the receiver.
+    pub right: [f32; 4],
+    /// Unit image up (xyz; w unused).
+    pub up: [f32; 4],
 }
 
 /// One analytic light (`Light` in common.glsl).

@@ -404,6 +404,8 @@ pub fn shadow_views(maps: &ShadowMaps) -> Vec<GpuShadowView> {
             origin: v4(v.origin, if v.ortho { 1.0 } else { 0.0 }),
             forward: v4(v.forward, v.half as f32),
             atlas: [v.atlas.0, v.atlas.1, v.size, 0],
+            right: v4(v.right, 0.0),
+            up: v4(v.up, 0.0),
         })
         .collect()
 }

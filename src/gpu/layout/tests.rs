@@ -115,10 +115,10 @@ fn frame_records_match_glsl() {
         glsl_fields("FrameConstants"),
         ["view_proj", "eye", "environment", "sizes", "misc"]
     );
-    assert_eq!(size_of::<GpuShadowView>(), 112);
+    assert_eq!(size_of::<GpuShadowView>(), 144);
     assert_eq!(
         glsl_fields("ShadowView"),
-        ["view_proj", "origin", "forward", "atlas"]
+        ["view_proj", "origin", "forward", "atlas", "right", "up"]
     );
     assert_eq!(size_of::<GpuLight>(), 80);
     assert_eq!(
