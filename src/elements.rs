@@ -446,16 +446,12 @@ mod tests {
         for (k, at, size, want) in cases {
             tri(&mut s, k, at);
             s.solver.element_size = size;
-            let t = std::time::Instant::now();
+            // The refusal comes from the estimate or the size check, before any element is
+            // made: the message says which (no wall-clock bound).
             let e = build_elements(&s, &s.solver).unwrap_err().to_string();
             assert!(
                 e.contains(want) && e.contains("element_size"),
                 "{k} {size}: {e}"
-            );
-            assert!(
-                t.elapsed().as_secs_f64() < 1.0,
-                "{k} {size}: took {:?}",
-                t.elapsed()
             );
         }
     }

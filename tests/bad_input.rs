@@ -212,15 +212,16 @@ fn expect_file(text: &str) -> Option<String> {
 }
 
 /// Loads on another thread: a loader that opened a FIFO would block forever, and this fails
-/// after a few seconds instead of hanging the suite.
+/// instead of hanging the suite. A liveness guard, not a speed bound: the refusal is a
+/// metadata check that reads nothing, so 60 s on any machine means it blocked.
 fn load_within_seconds(scene: &Path) -> Result<antiradiance::Scene, String> {
     let (tx, rx) = std::sync::mpsc::channel();
     let p = scene.to_path_buf();
     std::thread::spawn(move || {
         let _ = tx.send(load_scene(&p).map_err(|e| e.to_string()));
     });
-    rx.recv_timeout(std::time::Duration::from_secs(5))
-        .expect("loading did not finish within 5 s")
+    rx.recv_timeout(std::time::Duration::from_secs(60))
+        .expect("loading blocked (opened a pipe or a device?)")
 }
 
 /// Paths that are not regular files say what they are, and are never read (a FIFO would
@@ -308,9 +309,8 @@ fn absurd_sizes_are_refused_quickly() {
             "s.toml",
             &format!("{toml}[[object]]\nmesh = \"q.obj\"\n"),
         );
-        let t = std::time::Instant::now();
+        // Refused when the settings are read, before any mesh is loaded or element made.
         expect_error(&p, &["s.toml", field]);
-        assert!(t.elapsed().as_secs_f64() < 1.0, "{toml}: {:?}", t.elapsed());
     }
     for (obj, object) in [
         ("v 0 0 0\nv 1e30 0 0\nv 0 1e30 0\nf 1 2 3\n", ""),
@@ -326,12 +326,7 @@ fn absurd_sizes_are_refused_quickly() {
             "s.toml",
             &format!("[[object]]\nmesh = \"m.obj\"\n{object}"),
         );
-        let t = std::time::Instant::now();
+        // Refused when the mesh is placed, before anything is subdivided.
         expect_error(&p, &["1e15"]);
-        assert!(
-            t.elapsed().as_secs_f64() < 1.0,
-            "{object}: {:?}",
-            t.elapsed()
-        );
     }
 }
