@@ -268,7 +268,7 @@ fn block_on_a_floor_under_an_emitter() {
 
 /// Measured: relative RMSE 0.200, mean +1.0%, indirect light 0.253, and the floor under the
 /// slabs (121 pixels reached only by indirect light) 10.9% off at the median; GPU vs CPU
-/// 4.3e-5. Without antiradiance: 0.212, mean +0.4%, indirect light 0.673, median 62%. (With
+/// 4.1e-5. Without antiradiance: 0.212, mean +0.4%, indirect light 0.673, median 62%. (With
 /// the emitter's light through the bins, before issue 17: 0.722, median 418%: the stacked
 /// occluders leaked the direct light, a leak that shrank with the bins and τ, so the directional
 /// discretization of the cancellation.)
@@ -281,7 +281,8 @@ fn black_and_grey_slabs_between_an_emitter_and_a_floor() {
         mean_bias: 0.042,
         indirect_rmse: 0.44,
         indirect_median: Some(0.21),
-        gpu_vs_cpu: 8e-4,
+        // Measured 4.3e-5, 4.1e-5 after the receiver-plane shadow lookup (float16 tables).
+        gpu_vs_cpu: 1.3e-4,
         gpu_vs_cpu_f16: 0.125,
     };
     check("slabs", &s, &truth, &bounds);

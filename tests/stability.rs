@@ -374,10 +374,13 @@ fn near_mirror_phong_up_to_1e4_converges_with_bounded_energy() {
             .fold(0.0, f64::max);
         let bound = 1.0 / (1.0 - 0.99);
         println!("Phong ns={ns:e}: residual {r:.2e} after 60 iterations, brightest bin {worst:.3} (bound {bound:.0}), flux {:.4}", solver.exitant_flux());
-        // Measured: residual 5.8e-11 … 6.3e-11, brightest bin 1.070 … 1.071 (the lamp's 1 plus
+        // Measured: residual 8.3e-11 … 8.9e-11, brightest bin 1.072 … 1.074 (the lamp's 1 plus
         // what it reflects), far under the energy bound.
         assert!(r < 2e-10, "ns {ns}: residual {r}");
         assert!(worst < bound && worst < 1.6, "ns {ns}: {worst}");
+        // And from below: the lamp's own 1 plus a glossy reflection of 0.07; a glossy lobe that
+        // reflected nothing would leave 1.000.
+        assert!(worst > 1.035, "ns {ns}: {worst}: no glossy reflection");
     }
     let mut s = build(1e4);
     s.solver.iterations = 8;
@@ -392,10 +395,11 @@ fn near_mirror_phong_up_to_1e4_converges_with_bounded_energy() {
     let g = render_with("Phong 1e4", &s, Backend::Gpu);
     let e = worst_relative(&g, &c, 1.0);
     println!("Phong 1e4: GPU vs CPU worst pixel {e:.2e}");
-    // Measured 1.2e-3 (float32 tables: the albedo 0.99 gain rules out float16; the lamp lights
-    // by emitter samples, whose shadow maps are rasterized on the GPU and ray cast on the CPU,
-    // so texels at silhouettes differ), bound 3×.
-    assert!(e < 3.5e-3, "{e}");
+    // Measured 4.2e-4 (1.2e-3 before the receiver-plane shadow lookup; float32 tables: the
+    // albedo 0.99 gain rules out float16; the lamp lights by emitter samples, whose shadow maps
+    // are rasterized on the GPU and ray cast on the CPU, so texels at silhouettes differ),
+    // bound 3×.
+    assert!(e < 1.3e-3, "{e}");
 }
 
 /// 1024 bins, a single element, and elements spanning six orders of magnitude in area: both
