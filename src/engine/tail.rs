@@ -23,6 +23,8 @@ struct Undo {
     before: Table,
     /// The change of the iteration before it.
     change: f64,
+    /// The monitor's trajectory before it ([`Monitor::extrapolated`]).
+    trajectory: (usize, Option<f64>),
 }
 
 /// The tail extrapolation's state over one run of the drive loop.
@@ -75,7 +77,7 @@ impl Tail {
             return Ok(Checked::Kept);
         }
         solver.warm_start(prep, &u.before)?;
-        monitor.truncate(u.at);
+        monitor.undo_extrapolation(u.at, u.trajectory);
         self.enabled = false;
         self.snapshot = None;
         Ok(Checked::Undone {
@@ -110,11 +112,12 @@ impl Tail {
                 Some((q, factor)) => {
                     let x = solver.i_ex()?;
                     solver.warm_start(prep, &extrapolate(&x, &x_s, factor))?;
-                    monitor.extrapolated(q);
+                    let trajectory = monitor.extrapolated(q);
                     self.undo = Some(Undo {
                         at: k,
                         before: x,
                         change: monitor.changes[k - 1],
+                        trajectory,
                     });
                 }
                 // Not a single mode yet: a new window from here.

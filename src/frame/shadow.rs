@@ -17,7 +17,7 @@ pub const EMPTY: f32 = 3.0e38;
 /// Depth bias, in texels at the receiver, along the light's ray. The lookup compares each tap
 /// with the receiver's own plane at that tap's texel (receiver-plane depth), so a planar
 /// receiver matches its own map to rounding at any slope and needs no slope-scaled bias; what
-/// is left is this half texel (rounding of the map and of the plane, a mesh's curvature within a
+/// is left is this tenth of a texel (rounding of the map and of the plane, a mesh's curvature within a
 /// texel). Before, a fixed offset toward the light plus a slope-scaled bias of up to 13.5 texels
 /// lifted a receiver past any occluder that near: a band of light along every contact (a wall
 /// under a roof lit to 2 pixels below the roof at 256² maps, `tests/contact.rs`).

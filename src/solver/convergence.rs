@@ -188,10 +188,20 @@ impl Monitor {
     }
 
     /// Notes that the state was just extrapolated along a mode contracting at `q`
-    /// ([`crate::solver::extrapolate`]): the next changes start a new trajectory.
-    pub fn extrapolated(&mut self, q: f64) {
+    /// ([`crate::solver::extrapolate`]): the next changes start a new trajectory. Returns the
+    /// trajectory it replaces, for [`Monitor::undo_extrapolation`].
+    pub fn extrapolated(&mut self, q: f64) -> (usize, Option<f64>) {
+        let before = (self.epoch, self.dominant);
         self.epoch = self.changes.len();
         self.dominant = Some(q);
+        before
+    }
+
+    /// Undoes an extrapolation made after the first `n` iterations: forgets the iterations
+    /// since and restores the trajectory [`Monitor::extrapolated`] returned.
+    pub fn undo_extrapolation(&mut self, n: usize, before: (usize, Option<f64>)) {
+        self.truncate(n);
+        (self.epoch, self.dominant) = before;
     }
 
     /// Where the changes of the current trajectory begin (after the last extrapolation).
@@ -232,7 +242,14 @@ impl Monitor {
         // After an extrapolation, what is left in the dominant mode still contracts at its
         // measured ratio, and no mode is slower: a faster-looking window is the other modes dying
         // out, a slower-looking one rounding noise.
-        let q = self.dominant.or_else(|| self.contraction());
+        // Once the trajectory since is long enough to measure and its changes are well above
+        // the tables' rounding, a slower ratio seen there is real: the larger of the two.
+        let since = self.changes.len() - self.epoch.min(self.changes.len());
+        let q = match (self.dominant, self.contraction()) {
+            (Some(d), Some(c)) if since > 8 && r > 64.0 * self.rounding => Some(d.max(c)),
+            (Some(d), _) => Some(d),
+            (None, c) => c,
+        };
         Some(match q {
             Some(q) => r * q.max(0.0) / (1.0 - q),
             None => r,
@@ -272,12 +289,13 @@ impl Monitor {
         }
     }
 
-    /// Whether the changes are the tables' rounding: a relative change within 4 unit roundoffs,
-    /// or within 64 while no longer falling over the last eight iterations.
+    /// Whether the changes are the tables' rounding: no change at all, or a relative change
+    /// within 64 unit roundoffs that no longer falls over the last eight iterations (a run
+    /// still contracting near the rounding goes on).
     fn at_rounding(&self) -> bool {
         let k = self.changes.len();
         let (r, u) = (self.residuals[k - 1], self.rounding);
-        if r <= 4.0 * u {
+        if r == 0.0 {
             return true;
         }
         if r > 64.0 * u || k < self.epoch + 8 {
@@ -420,10 +438,11 @@ mod tests {
         let r = *m.residuals.last().unwrap();
         let e = m.error_estimate().unwrap();
         assert!((e / r - 99.0).abs() < 1e-6, "{e} vs {r}");
-        m.truncate(20);
-        assert_eq!(m.epoch(), 20);
-        m.truncate(10);
-        assert_eq!(m.epoch(), 0);
+        // Undone, the trajectory before it is back (no dominant ratio: 20 plain changes).
+        m.undo_extrapolation(20, (0, None));
+        assert_eq!((m.epoch(), m.changes.len()), (0, 20));
+        let plain = m.error_estimate().unwrap() / m.residuals.last().unwrap();
+        assert!((plain - 99.0).abs() < 1e-6, "{plain}");
     }
 
     #[test]

@@ -65,8 +65,9 @@ pub fn tail_factor(changes: &[f64], energies: &[f64], s: usize) -> Option<(f64, 
         return None;
     }
     let steps: Vec<f64> = (s..k).map(|i| energies[i] - energies[i - 1]).collect();
+    // signum(0) is 1: a flat step is refused explicitly.
     let sign = steps[0].signum();
-    if sign == 0.0 || steps.iter().any(|d| d.signum() != sign) {
+    if steps.iter().any(|&d| d == 0.0 || d.signum() != sign) {
         return None;
     }
     let magnitudes: Vec<f64> = steps.iter().map(|d| d.abs()).collect();
