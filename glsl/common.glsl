@@ -92,7 +92,7 @@ layout(push_constant) uniform FrameConstants {
     vec4 eye;         // xyz eye; w = 1 / source scale
     vec4 environment; // rgb radiance where camera rays escape; w: exposure factor on the output
     uvec4 sizes;      // target width, height, bins, rows per column block
-    uvec4 misc;       // light count, shadow view, shadow map side, supersampling
+    uvec4 misc;       // light count, shadow view (compose: y..z the shared lights), supersampling
 } pc;
 
 struct ShadowView {

@@ -88,11 +88,68 @@ vec3 edge_emission(ivec2 px, int ss) {
     return sum / float(e * e);
 }
 
+// The samples of a pixel share one evaluation of the area emitters' direct light, at their mean
+// position, where they all face the eye on one flat surface of one material (on one face slot
+// where shading normals interpolate): that light is smooth there (a penumbra over 32 emitter
+// samples) and it is most of the frame's cost. Point, spot and directional lights stay per
+// sample: their shadow edges can be sharper than a pixel (frame/cpu.rs shared_direct).
+bool ar_shares_direct(ivec2 px, int ss, out vec3 mid, out vec3 normal_sum) {
+    mid = vec3(0.0);
+    normal_sum = vec3(0.0);
+    uint slot0 = 0u;
+    for (int k = 0; k < ss * ss; k++) {
+        ivec2 t = px * ss + ivec2(k % ss, k / ss);
+        vec4 g = texelFetch(gbuf_position, t, 0);
+        if (ar_gbuf_background(g.w)) {
+            return false;
+        }
+        uint slot = ar_gbuf_leaf(g.w);
+        FrameElement e = elements[slot];
+        if (dot(pc.eye.xyz - g.xyz, e.face_normal.xyz) <= 0.0) {
+            return false;
+        }
+        if (k == 0) {
+            slot0 = slot;
+        } else if (slot != slot0) {
+            FrameElement a = elements[slot0];
+            FrameElement b = elements[slot];
+            if (a.ids.y != b.ids.y || a.ids.w != b.ids.w || a.cos_norm.y > 0.5 || b.cos_norm.y > 0.5) {
+                return false;
+            }
+        }
+        mid += g.xyz;
+        if (e.cos_norm.y > 0.5) {
+            normal_sum += texelFetch(gbuf_normal, t, 0).xyz;
+        }
+    }
+    mid /= float(ss * ss);
+    return true;
+}
+
 void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
     int ss = int(pc.misc.w);
     vec3 rest = vec3(0.0);
     vec3 emission = vec3(0.0);
+    vec3 mid;
+    vec3 normal_sum;
+    // The area emitters' samples, lights pc.misc.y..z (an empty range where they are not shared).
+    uint a = pc.misc.y;
+    uint b = pc.misc.z;
+    bool shared_direct = a < b && ar_shares_direct(px, ss, mid, normal_sum);
+    vec3 direct = vec3(0.0);
+    if (shared_direct) {
+        FrameElement e = elements[ar_gbuf_leaf(texelFetch(gbuf_position, px * ss, 0).w)];
+        vec3 n = e.face_normal.xyz;
+        vec3 wo = normalize(pc.eye.xyz - mid);
+        if (dot(wo, n) > 0.0) {
+            vec3 ns = n;
+            if (e.cos_norm.y > 0.5) {
+                ns = ar_shading_normal(normal_sum, n, wo);
+            }
+            direct = ar_direct_radiance(mid, n, ns, materials[e.ids.w], wo, a, b, b, b);
+        }
+    }
     for (int sy = 0; sy < ss; sy++) {
         for (int sx = 0; sx < ss; sx++) {
             ivec2 t = px * ss + ivec2(sx, sy);
@@ -113,7 +170,9 @@ void main() {
             if (e.cos_norm.y > 0.5) {
                 ns = ar_shading_normal(texelFetch(gbuf_normal, t, 0).xyz, n, wo);
             }
-            vec3 l = ar_direct_radiance(g.xyz, n, ns, m, wo);
+            // Every light, less the shared ones where they were shared.
+            uint skip = shared_direct ? a : pc.misc.x;
+            vec3 l = direct + ar_direct_radiance(g.xyz, n, ns, m, wo, 0u, pc.misc.x, skip, b);
             // Only the shading kinds the scene has are compiled in (AR_VERTEX, AR_SPLAT).
             if (e.ids.z == AR_MODE_VERTEX) {
                 if (AR_VERTEX) {

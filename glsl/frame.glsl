@@ -26,6 +26,7 @@ const float AR_SHADOW_DEPTH_BIAS = 0.1;
 const float AR_SHADOW_RELATIVE_BIAS = 1e-5;
 const float AR_SHADOW_GRAZING = 0.001;
 const float AR_SHADOW_FILTER_RADIUS = 1.0;
+const int AR_SHADOW_TAPS = 2;
 const uint AR_MODE_VERTEX = 1u;
 
 // The G-buffer's position w (glsl/gbuffer.frag): 0 where nothing was hit, else the leaf slot + 1,
@@ -189,14 +190,15 @@ float ar_visibility(Light l, vec3 p, vec3 n, float cosv) {
     float ty = (c.y / c.w + 1.0) * 0.5 * float(s) - 0.5;
     float own = ortho ? dot(p - v.origin.xyz, v.forward.xyz) : length(p - v.origin.xyz);
     float bias = texel * AR_SHADOW_DEPTH_BIAS + abs(own) * AR_SHADOW_RELATIVE_BIAS;
+    // A tent of radius 1 texel weighs the 2x2 texels around the point (shadow.rs TAPS).
     int x0 = int(floor(tx - AR_SHADOW_FILTER_RADIUS)) + 1;
     int y0 = int(floor(ty - AR_SHADOW_FILTER_RADIUS)) + 1;
     float lit = 0.0;
     float total = 0.0;
-    for (int j = 0; j < 3; j++) {
+    for (int j = 0; j < AR_SHADOW_TAPS; j++) {
         int ky = y0 + j;
         float wy = max(1.0 - abs(float(ky) - ty) / AR_SHADOW_FILTER_RADIUS, 0.0);
-        for (int i = 0; i < 3; i++) {
+        for (int i = 0; i < AR_SHADOW_TAPS; i++) {
             int kx = x0 + i;
             float wx = max(1.0 - abs(float(kx) - tx) / AR_SHADOW_FILTER_RADIUS, 0.0);
             float w = wx * wy;
@@ -217,11 +219,20 @@ float ar_visibility(Light l, vec3 p, vec3 n, float cosv) {
     return total > 0.0 ? lit / total : 1.0;
 }
 
-// lights.rs direct_radiance: n the face normal (front side, shadow lookup), ns the shading
-// normal (receiver cosine, BRDF).
-vec3 ar_direct_radiance(vec3 p, vec3 n, vec3 ns, Material m, vec3 wo) {
+// lights.rs direct_radiance_from: n the face normal (front side, shadow lookup), ns the shading
+// normal (receiver cosine, BRDF); the lights `begin..end` less `skip..skip_end` (ranges, not a
+// filter: on lavapipe a loop over lights that are skipped costs nearly as much as one that
+// takes them, and each call site is another inlined copy of the loop).
+vec3 ar_direct_radiance(vec3 p, vec3 n, vec3 ns, Material m, vec3 wo, uint begin, uint end,
+                        uint skip, uint skip_end) {
     vec3 l = vec3(0.0);
-    for (uint i = 0u; i < pc.misc.x; i++) {
+    for (uint i = begin; i < end; i++) {
+        if (i == skip) {
+            i = skip_end;
+            if (i >= end) {
+                break;
+            }
+        }
         vec3 travel;
         vec3 e;
         if (!ar_incident(lights[i], p, travel, e)) {

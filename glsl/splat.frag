@@ -9,7 +9,8 @@ layout(location = 2) flat in uvec2 row_surface;
 layout(location = 0) out vec4 acc;
 
 void main() {
-    vec4 g = texelFetch(gbuf_position, ivec2(gl_FragCoord.xy), 0);
+    ivec2 t = ivec2(gl_FragCoord.xy);
+    vec4 g = texelFetch(gbuf_position, t, 0);
     if (ar_gbuf_background(g.w)) {
         discard;
     }
@@ -21,14 +22,18 @@ void main() {
     if (w <= 0.0) {
         discard;
     }
-    // The bin toward the eye as the pixel's shading normal sees it (shading.rs eye_direction);
-    // the splatted elements lie in the pixel's plane.
-    vec3 wo = normalize(pc.eye.xyz - g.xyz);
-    vec3 dir = wo;
-    if (h.cos_norm.y > 0.5) {
-        vec3 n = h.face_normal.xyz;
-        vec3 ns = ar_shading_normal(texelFetch(gbuf_normal, ivec2(gl_FragCoord.xy), 0).xyz, n, wo);
-        dir = ar_eye_direction(wo, ns, n);
+    // The bin toward the eye as the pixel's shading normal sees it, found once per sample by
+    // the G-buffer (surfaces.rs display_bin); the splatted leaf's own cosine normalizes it.
+    float bin = texelFetch(gbuf_vertex, t, 0).w;
+    vec3 l = vec3(0.0);
+    if (bin >= 0.0) {
+        uint b = uint(bin + 0.5);
+        float cb = dot(bin_centers[b].xyz, normal_ac.xyz);
+        if (cb > 0.0) {
+            uint row = row_surface.x;
+            ivec2 k = ivec2((row / pc.sizes.w) * (ar_nu() * ar_nv()) + b, row % pc.sizes.w);
+            l = texelFetch(i_total, k, 0).rgb * pc.eye.w / (normal_ac.w * cb);
+        }
     }
-    acc = vec4(ar_display_radiance_of(normal_ac.xyz, normal_ac.w, row_surface.x, dir) * w, w);
+    acc = vec4(l * w, w);
 }

@@ -7,10 +7,12 @@
 use super::camera::{View, SUPERSAMPLE};
 use super::edges::{EmitterTriangles, SampleHit};
 use super::image::Image;
-use super::lights::direct_radiance;
+use super::lights::{direct_radiance_from, emitter_sample_range, Receiver};
 use super::shading::{eye_direction, shading_normal};
 use super::shadow::ShadowMaps;
-use super::surfaces::{display_radiance, splat_weight, vertex_values, Surfaces, MODE_VERTEX};
+use super::surfaces::{
+    display_bin, display_radiance_in, splat_weight, vertex_values, Surfaces, MODE_VERTEX,
+};
 use crate::raycast::RayCaster;
 use crate::scene::{Camera, Light, Scene};
 use crate::solver::Table;
@@ -54,6 +56,27 @@ impl SplatGrid {
     }
 }
 
+/// A 2×2 sample's surface point facing the eye: what its direct light needs, and its
+/// indirect light (splatted or vertex-interpolated).
+#[derive(Clone, Copy)]
+struct Front {
+    p: DVec3,
+    slot: usize,
+    /// The interpolated shading normal (not normalized; the face normal without `vn`).
+    interpolated: DVec3,
+    ns: DVec3,
+    wo: DVec3,
+    indirect: DVec3,
+}
+
+/// What a 2×2 sample sees: the environment, a face from behind (black), or a face in front.
+#[derive(Clone, Copy)]
+enum Seen {
+    Background,
+    Back,
+    Front(Front),
+}
+
 /// Renders `camera`'s view of `scene` from the solved display intensities `i_total`.
 pub fn render(
     scene: &Scene,
@@ -72,9 +95,9 @@ pub fn render(
     let ss = SUPERSAMPLE as usize;
     let (sw, sh) = (w * ss, h * ss);
     let emitters = EmitterTriangles::new(scene);
-    // Every 2×2 sample first: its radiance less emission, its emission, and what it hit (for the
-    // emitter edges, `edges.rs`).
-    let mut samples = vec![(DVec3::ZERO, DVec3::ZERO, SampleHit::Background); sw * sh];
+    // Every 2×2 sample first: what it sees, its emission, and what it hit (for the emitter
+    // edges, `edges.rs`); the direct light comes per pixel, below.
+    let mut samples = vec![(Seen::Background, DVec3::ZERO, SampleHit::Background); sw * sh];
     samples
         .par_chunks_mut(sw)
         .enumerate()
@@ -84,7 +107,7 @@ pub fn render(
                 let y = (sy as f64 + 0.5) / SUPERSAMPLE as f64;
                 let d = view.ray(x, y);
                 *out = match caster.closest(view.eye, d, 0.0, f64::INFINITY) {
-                    None => (scene.environment, DVec3::ZERO, SampleHit::Background),
+                    None => (Seen::Background, DVec3::ZERO, SampleHit::Background),
                     Some(hit) => {
                         // The face slot hit, and its leaf (another where it is a cluster's).
                         let li = hit.shape as usize;
@@ -100,25 +123,25 @@ pub fn render(
                         };
                         let wo = -d;
                         if wo.dot(normal) <= 0.0 {
-                            (DVec3::ZERO, DVec3::ZERO, kind) // one-sided: the back is black
+                            (Seen::Back, DVec3::ZERO, kind) // one-sided: the back is black
                         } else {
                             // The shading normal lights the pixel and picks the bin toward
                             // the eye (`shading.rs`); without `vn` it is the face normal.
-                            let (ns, dir) = if surf.shaded[li] {
+                            let (interpolated, ns, dir) = if surf.shaded[li] {
                                 let n = surf.interpolated_normal(li, hit.u, hit.v);
                                 let ns = shading_normal(n, normal, wo);
-                                (ns, eye_direction(wo, ns, normal))
+                                (n, ns, eye_direction(wo, ns, normal))
                             } else {
-                                (normal, wo)
+                                (normal, normal, wo)
                             };
-                            let mut l = direct_radiance(lights, maps, p, normal, ns, mat, wo);
-                            if surf.mode[li] == MODE_VERTEX {
+                            let indirect = if surf.mode[li] == MODE_VERTEX {
                                 let cv = surf.corner_vertex[li];
-                                l += verts[cv[0] as usize] * (1.0 - hit.u - hit.v)
+                                verts[cv[0] as usize] * (1.0 - hit.u - hit.v)
                                     + verts[cv[1] as usize] * hit.u
-                                    + verts[cv[2] as usize] * hit.v;
+                                    + verts[cv[2] as usize] * hit.v
                             } else {
                                 let s = surf.surface[li];
+                                let bin = display_bin(sys, dir, normal);
                                 let (mut acc, mut wsum) = (DVec3::ZERO, 0.0);
                                 grid.near(p, |e| {
                                     let e = e as usize;
@@ -128,19 +151,29 @@ pub fn render(
                                             surf.radius[e],
                                         );
                                         if wt > 0.0 {
-                                            let e = surf.leaf[e] as usize;
-                                            acc += display_radiance(sys, i_total, e, dir) * wt;
+                                            if let Some(b) = bin {
+                                                let e = surf.leaf[e] as usize;
+                                                acc += display_radiance_in(sys, i_total, e, b) * wt;
+                                            }
                                             wsum += wt;
                                         }
                                     }
                                 });
                                 if wsum > 0.0 {
-                                    l += acc / wsum;
+                                    acc / wsum
+                                } else {
+                                    DVec3::ZERO
                                 }
-                            }
-                            // Discretization can leave a slightly negative indirect term
-                            // (antiradiance over-cancelling); radiance is never negative.
-                            (l.max(DVec3::ZERO), mat.ke, kind)
+                            };
+                            let front = Front {
+                                p,
+                                slot: li,
+                                interpolated,
+                                ns,
+                                wo,
+                                indirect,
+                            };
+                            (Seen::Front(front), mat.ke, kind)
                         }
                     }
                 };
@@ -155,16 +188,70 @@ pub fn render(
             })
         })
     };
+    let material =
+        |slot: usize| &sys.materials[sys.leaves[surf.leaf[slot] as usize].material as usize];
+    // The area emitters' samples, shared among a pixel's samples (empty: none shared).
+    let shared_lights = if scene.solver.direct_per_sample {
+        0..0
+    } else {
+        emitter_sample_range(lights)
+    };
+    let direct_at = |f: &Front, range| {
+        let r = Receiver {
+            p: f.p,
+            n: surf.normal[f.slot],
+            shading: f.ns,
+            wo: f.wo,
+        };
+        direct_radiance_from(lights, maps, &r, material(f.slot), range)
+    };
     let n = (ss * ss) as f64;
     let mut pixels = vec![[0f32; 3]; w * h];
     pixels.par_chunks_mut(w).enumerate().for_each(|(py, row)| {
         for (px, out) in row.iter_mut().enumerate() {
+            let seen: Vec<Seen> = (0..ss * ss)
+                .map(|k| sample(px, py, k % ss, k / ss).0)
+                .collect();
+            let share = !shared_lights.is_empty();
+            let shared = share.then(|| shared_direct(&seen, surf, sys)).flatten();
+            let shared = shared.map(|(mid, interpolated, slot)| {
+                let normal = surf.normal[slot];
+                let wo = (view.eye - mid).normalize();
+                if wo.dot(normal) <= 0.0 {
+                    return DVec3::ZERO;
+                }
+                let ns = if surf.shaded[slot] {
+                    shading_normal(interpolated, normal, wo)
+                } else {
+                    normal
+                };
+                let r = Receiver {
+                    p: mid,
+                    n: normal,
+                    shading: ns,
+                    wo,
+                };
+                direct_radiance_from(lights, maps, &r, material(slot), shared_lights.clone())
+            });
             let (mut rest, mut emission) = (DVec3::ZERO, DVec3::ZERO);
-            for j in 0..ss {
-                for i in 0..ss {
-                    let s = sample(px, py, i, j);
-                    rest += s.0;
-                    emission += s.1;
+            for k in 0..ss * ss {
+                let s = sample(px, py, k % ss, k / ss);
+                match &s.0 {
+                    Seen::Background => rest += scene.environment,
+                    Seen::Front(f) => {
+                        let direct = match shared {
+                            Some(d) => {
+                                d + direct_at(f, 0..shared_lights.start)
+                                    + direct_at(f, shared_lights.end..lights.len())
+                            }
+                            None => direct_at(f, 0..lights.len()),
+                        };
+                        // Discretization can leave a slightly negative indirect term
+                        // (antiradiance over-cancelling); radiance is never negative.
+                        rest += (direct + f.indirect).max(DVec3::ZERO);
+                        emission += s.1;
+                    }
+                    Seen::Back => {}
                 }
             }
             let emission = if sees_emitter(px, py) {
@@ -187,4 +274,36 @@ pub fn render(
         height: view.height,
         pixels,
     }
+}
+
+/// Where a pixel's samples share one evaluation of the area emitters' direct light
+/// (glsl/compose.frag ar_shares_direct): all hit a face from its front, on one flat surface of
+/// one material without shading normals, or on one face slot. Returns their mean position, the
+/// sum of their interpolated normals and the first sample's slot. That light is smooth there (a
+/// penumbra over 32 emitter samples), so one evaluation at the mean differs from the samples'
+/// mean by the curvature of the shading within a pixel; it is most of the frame's cost (32
+/// shadow-mapped samples per emitter). Point, spot and directional lights stay per sample:
+/// their shadow edges can be sharper than a pixel.
+fn shared_direct(seen: &[Seen], surf: &Surfaces, sys: &System) -> Option<(DVec3, DVec3, usize)> {
+    let material = |slot: usize| sys.leaves[surf.leaf[slot] as usize].material;
+    let first = seen.first()?;
+    let slot0 = match first {
+        Seen::Front(f) => f.slot,
+        _ => return None,
+    };
+    let (mut mid, mut normal) = (DVec3::ZERO, DVec3::ZERO);
+    for s in seen {
+        let Seen::Front(f) = s else { return None };
+        if f.slot != slot0
+            && (surf.surface[f.slot] != surf.surface[slot0]
+                || material(f.slot) != material(slot0)
+                || surf.shaded[f.slot]
+                || surf.shaded[slot0])
+        {
+            return None;
+        }
+        mid += f.p;
+        normal += f.interpolated;
+    }
+    Some((mid / seen.len() as f64, normal, slot0))
 }

@@ -11,6 +11,7 @@ use crate::solver::Table;
 use crate::system::System;
 use glam::DVec3;
 use std::f64::consts::PI;
+use std::ops::Range;
 
 /// Light arriving at a point from one analytic light, before the receiver's cosine and shadowing.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -119,6 +120,59 @@ pub fn brdf(mat: &Material, n: DVec3, travel: DVec3, wo: DVec3) -> DVec3 {
     f
 }
 
+/// The lights the frame shares among a pixel's samples (`frame::cpu::shared_direct`): the area
+/// emitters' samples, which the engine appends as one run; empty where they are not one run.
+pub fn emitter_sample_range(lights: &[Light]) -> Range<usize> {
+    let taken = |l: &Light| matches!(l, Light::EmitterSample { .. });
+    let Some(start) = lights.iter().position(taken) else {
+        return 0..0;
+    };
+    let end = start + lights[start..].iter().take_while(|l| taken(l)).count();
+    if lights[end..].iter().any(taken) {
+        return 0..0;
+    }
+    start..end
+}
+
+/// A surface point receiving light.
+#[derive(Clone, Copy, Debug)]
+pub struct Receiver {
+    /// The point.
+    pub p: DVec3,
+    /// Its face's unit normal, facing `wo` (front side, shadow lookup).
+    pub n: DVec3,
+    /// Its unit shading normal (receiver cosine, BRDF).
+    pub shading: DVec3,
+    /// The unit direction toward the eye.
+    pub wo: DVec3,
+}
+
+/// [`direct_radiance`] from the lights `range` of `lights`.
+pub fn direct_radiance_from(
+    lights: &[Light],
+    maps: &ShadowMaps,
+    r: &Receiver,
+    mat: &Material,
+    range: Range<usize>,
+) -> DVec3 {
+    let mut l = DVec3::ZERO;
+    for (i, light) in lights.iter().enumerate().take(range.end).skip(range.start) {
+        let Some(inc) = incident(light, r.p) else {
+            continue;
+        };
+        let cos_face = -inc.travel.dot(r.n);
+        let cos = -inc.travel.dot(r.shading);
+        if cos_face <= 0.0 || cos <= 0.0 {
+            continue;
+        }
+        let v = maps.visibility(i, r.p, r.n, cos_face);
+        if v > 0.0 {
+            l += brdf(mat, r.shading, inc.travel, r.wo) * inc.irradiance * (cos * v);
+        }
+    }
+    l
+}
+
 /// Radiance reflected toward `wo` at surface point `p` from every analytic light, shadowed by
 /// `maps`. `n` is the face's unit normal (facing `wo`): light must arrive at its front (the
 /// surface is opaque from both sides) and the shadow lookup uses it; `shading` is the unit
@@ -133,22 +187,8 @@ pub fn direct_radiance(
     mat: &Material,
     wo: DVec3,
 ) -> DVec3 {
-    let mut l = DVec3::ZERO;
-    for (i, light) in lights.iter().enumerate() {
-        let Some(inc) = incident(light, p) else {
-            continue;
-        };
-        let cos_face = -inc.travel.dot(n);
-        let cos = -inc.travel.dot(shading);
-        if cos_face <= 0.0 || cos <= 0.0 {
-            continue;
-        }
-        let v = maps.visibility(i, p, n, cos_face);
-        if v > 0.0 {
-            l += brdf(mat, shading, inc.travel, wo) * inc.irradiance * (cos * v);
-        }
-    }
-    l
+    let r = Receiver { p, n, shading, wo };
+    direct_radiance_from(lights, maps, &r, mat, 0..lights.len())
 }
 
 /// Direct incident radiance per node and bin (leaf rows only): each light puts, in the bin of

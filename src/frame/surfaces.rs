@@ -319,6 +319,23 @@ pub fn display_radiance(sys: &System, i_total: &Table, li: usize, wo: DVec3) -> 
     i_total.row(leaf.node as usize)[b] / (leaf.area * leaf.cos_norm * cb)
 }
 
+/// The bin toward the eye of a splatted sample whose face has unit normal `n`, seen along `dir`
+/// (the eye direction for its shading normal); `None` where `dir` is behind the face. Found
+/// once per sample: every leaf splatted onto it lies in its plane (the G-buffer stores it).
+pub fn display_bin(sys: &System, dir: DVec3, n: DVec3) -> Option<usize> {
+    (dir.dot(n) > 0.0).then(|| front_bin(&sys.bins, dir, n, 1.0))
+}
+
+/// [`display_radiance`] of leaf `li` in the bin `b` that [`display_bin`] found for the pixel.
+pub fn display_radiance_in(sys: &System, i_total: &Table, li: usize, b: usize) -> DVec3 {
+    let leaf = &sys.leaves[li];
+    let cb = sys.bins.centers[b].dot(leaf.normal);
+    if cb <= 0.0 {
+        return DVec3::ZERO;
+    }
+    i_total.row(leaf.node as usize)[b] / (leaf.area * leaf.cos_norm * cb)
+}
+
 /// Per-vertex values for an eye at `eye`: the weighted mean ([`Surfaces::adjacency_weight`]) of
 /// the display radiance of the leaves listed at each shared vertex that face the eye, each read in the bin of
 /// [`eye_direction`] for its shading normal at the vertex.

@@ -176,7 +176,14 @@ pub struct GpuFrame {
 }
 
 /// The frame's push constants for `camera` over `scene` (its bounds set the depth range).
-fn constants(scene: &Scene, lights: usize, camera: &Camera, sys: &System) -> FrameConstants {
+fn constants(scene: &Scene, lights: &[Light], camera: &Camera, sys: &System) -> FrameConstants {
+    // The area emitters' samples the compose pass shares among a pixel's samples (an empty
+    // range: none, every light per sample).
+    let shared = if scene.solver.direct_per_sample {
+        0..0
+    } else {
+        crate::frame::lights::emitter_sample_range(lights)
+    };
     let view = View::new(camera);
     let (lo, hi) = scene.bounds();
     let far = ((lo + hi) * 0.5 - view.eye).length() + (hi - lo).length() + 1e-6;
@@ -192,7 +199,14 @@ fn constants(scene: &Scene, lights: usize, camera: &Camera, sys: &System) -> Fra
             grid,
             0,
         ],
-        misc: [lights as u32, 0, 0, SUPERSAMPLE],
+        // y: the shadow pass's view (shadow.rs); for compose, y..z the lights whose direct
+        // light a pixel's samples share.
+        misc: [
+            lights.len() as u32,
+            shared.start as u32,
+            shared.end as u32,
+            SUPERSAMPLE,
+        ],
     }
 }
 
@@ -267,7 +281,7 @@ impl GpuFrame {
             i_total: None,
             exposure: 1.0,
             staged: super::staged::Staged::new(c),
-            constants: constants(scene, lights.len(), camera, sys),
+            constants: constants(scene, lights, camera, sys),
             profiler: Profiler::new(c, 16)?,
             ctx: ctx.clone(),
             images,
@@ -294,7 +308,7 @@ impl GpuFrame {
         if self.shadow_rects.is_empty() {
             unused.push((&mut im.shadow_map, crate::frame::shadow::EMPTY));
         }
-        if !self.features.vertex && !self.features.normals {
+        if !self.features.vertex && !self.features.normals && !self.features.splat {
             unused.push((&mut im.gbuf_vertex, 0.0));
         }
         if !self.features.normals {
@@ -481,7 +495,7 @@ impl GpuFrame {
     pub fn set_camera(
         &mut self,
         scene: &Scene,
-        lights: usize,
+        lights: &[Light],
         camera: &Camera,
         sys: &System,
     ) -> Result<()> {

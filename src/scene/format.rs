@@ -319,4 +319,7 @@ pub struct SolverDesc {
     pub face_clusters: Option<bool>,
     /// Sum the geometric tail of a stiff iteration in one step (default true).
     pub extrapolate: Option<bool>,
+    /// The area emitters' direct light at each of a pixel's 2×2 samples (default false: once
+    /// per pixel where its samples lie on one flat surface).
+    pub direct_per_sample: Option<bool>,
 }

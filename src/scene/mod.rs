@@ -222,6 +222,11 @@ pub struct SolverSettings {
     /// Whether a stiff iteration's geometric tail is summed in one step where one mode
     /// dominates ([`crate::solver::extrapolate`]); off, plain iteration only.
     pub extrapolate: bool,
+    /// Whether the frame evaluates the area emitters' direct light at each of a pixel's 2×2
+    /// samples; off (the default), once at their mean where they lie on one flat surface
+    /// (`frame::cpu::shared_direct`, a quarter of the frame's cost), which can differ at a
+    /// penumbra sharper than a pixel (low resolutions).
+    pub direct_per_sample: bool,
 }
 
 /// Most emitter samples (each has six shadow-map faces).
@@ -245,6 +250,7 @@ impl Default for SolverSettings {
             iterations_per_frame: 4,
             face_clusters: true,
             extrapolate: true,
+            direct_per_sample: false,
         }
     }
 }

@@ -34,6 +34,8 @@ fn glsl_uses_the_same_constants() {
         let line = format!("const float AR_SHADOW_{name} = {v:?};");
         assert!(glsl.contains(&line), "frame.glsl lacks `{line}`");
     }
+    let taps = format!("const int AR_SHADOW_TAPS = {TAPS};");
+    assert!(glsl.contains(&taps), "frame.glsl lacks `{taps}`");
     let mode = format!(
         "const uint AR_MODE_VERTEX = {}u;",
         crate::frame::surfaces::MODE_VERTEX

@@ -18,8 +18,10 @@ resource_set! {
         pub shadow_depth,
         /// G-buffer position + leaf (2W × 2H).
         pub gbuf_position,
-        /// G-buffer vertex-interpolated radiance (1×1 placeholder without smooth meshes or
-        /// shading normals: the normal target comes after it).
+        /// G-buffer vertex-interpolated radiance, and in w the display bin toward the eye of a
+        /// splatted sample (−1 where none), so the splat reads it instead of finding it per
+        /// fragment (1×1 placeholder without smooth meshes, shading normals or flat surfaces:
+        /// the normal target comes after it).
         pub gbuf_vertex,
         /// G-buffer interpolated shading normal (1×1 placeholder without OBJ `vn`).
         pub gbuf_normal,
@@ -48,7 +50,7 @@ impl FrameImages<ImageDesc> {
             gbuf_position: frame("G-buffer position", sw, sh, RGBA32F),
             // Attachments are positional: the normal target (location 2) needs the vertex
             // target (location 1) at full size before it.
-            gbuf_vertex: if features.vertex || features.normals {
+            gbuf_vertex: if features.vertex || features.normals || features.splat {
                 frame("G-buffer vertex radiance", sw, sh, RGBA32F)
             } else {
                 frame("G-buffer vertex radiance (none)", 1, 1, RGBA32F)
