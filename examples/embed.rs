@@ -11,7 +11,7 @@
 //! the block's whole motion, so the update follows it in place and records its uploads into the
 //! host's command buffer, and the solve continues from the previous frame's solution.
 
-use antiradiance::engine::{Engine, Options};
+use antiradiance::engine::{Engine, Options, OutputImage};
 use antiradiance::frame::Image;
 use antiradiance::gpu::{Context, HostDevice};
 use antiradiance::progress::Silent;
@@ -419,7 +419,7 @@ fn frames_loop(
         }
         if frame == 0 {
             // 2a. The first frame starts from the initial state (emission, direct light).
-            engine.gpu()?.begin(cmd);
+            engine.begin_recording(cmd)?;
             engine.record_initialize(cmd)?;
         } else {
             // 2b. Later frames move the block along its keys (a quarter second per frame) and
@@ -445,15 +445,15 @@ fn frames_loop(
                 },
             )?;
             engine.record_update(cmd)?;
-            engine.gpu()?.begin(cmd);
+            engine.begin_recording(cmd)?;
         }
         // 3. Record `iterations_per_frame` iterations (4, the paper's), the frame, then the
         //    host's copy of the frame's output image.
         engine.record_iterations(cmd, per_frame)?;
         engine.record_draw(cmd)?;
-        let out = &engine.gpu()?.frame().images().output;
+        let out = engine.output_image()?;
         let (w, h) = (out.extent.width, out.extent.height);
-        copy_to_buffer(d, cmd, out.raw, w, h, buffer);
+        copy_to_buffer(d, cmd, &out, buffer);
         // 4. Submit on the host's queue and wait.
         unsafe {
             d.end_command_buffer(cmd)?;
@@ -487,9 +487,7 @@ fn frames_loop(
         }
         let mean = img.pixels.iter().flatten().map(|&v| v as f64).sum::<f64>()
             / (3 * img.pixels.len()) as f64;
-        let gpu = engine.gpu()?;
-        let mut timings = gpu.solver().read_timings()?.to_vec();
-        timings.extend_from_slice(gpu.frame().read_timings()?);
+        let timings = engine.recorded_timings()?;
         // Summed per pass over the frame's iterations, in first-seen order.
         let mut sums: Vec<(String, f64)> = Vec::new();
         for (name, ms) in timings {
@@ -502,7 +500,7 @@ fn frames_loop(
         let update = if frame == 0 {
             "none".to_string()
         } else {
-            let f = gpu.last_follow();
+            let f = engine.last_update().ok_or("no GPU backend")?;
             let ms = engine.update_times().total_ms;
             if engine.relinked() {
                 format!("{ms:.0} ms, relinked and made anew")
@@ -526,88 +524,68 @@ fn frames_loop(
     image.ok_or_else(|| "no frames".into())
 }
 
-/// Records a copy of the frame's output image (shader-read layout after `record_draw`) into
-/// `buffer`, and puts the image back in the layout the library expects.
-fn copy_to_buffer(
-    d: &ash::Device,
-    cmd: vk::CommandBuffer,
-    image: vk::Image,
-    w: u32,
-    h: u32,
-    buffer: vk::Buffer,
-) {
+/// Records the copy of the engine's output image into `buffer`: the image from the state
+/// `record_draw` leaves it in (`OutputImage`: layout, stages, access) to a transfer source and
+/// back, so the engine's next draw finds it as it left it.
+fn copy_to_buffer(d: &ash::Device, cmd: vk::CommandBuffer, out: &OutputImage, buffer: vk::Buffer) {
     let range = vk::ImageSubresourceRange::default()
         .aspect_mask(vk::ImageAspectFlags::COLOR)
         .level_count(1)
         .layer_count(1);
-    let barrier = |old, new, src: vk::AccessFlags, dst: vk::AccessFlags| {
-        vk::ImageMemoryBarrier::default()
-            .old_layout(old)
-            .new_layout(new)
-            .src_access_mask(src)
-            .dst_access_mask(dst)
-            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-            .image(image)
-            .subresource_range(range)
-    };
-    let all = vk::PipelineStageFlags::ALL_COMMANDS;
+    let to_copy = vk::ImageMemoryBarrier2::default()
+        .src_stage_mask(out.stages)
+        .src_access_mask(out.access)
+        .dst_stage_mask(vk::PipelineStageFlags2::COPY)
+        .dst_access_mask(vk::AccessFlags2::TRANSFER_READ)
+        .old_layout(out.layout)
+        .new_layout(vk::ImageLayout::TRANSFER_SRC_OPTIMAL)
+        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .image(out.image)
+        .subresource_range(range);
+    let back = vk::ImageMemoryBarrier2::default()
+        .src_stage_mask(vk::PipelineStageFlags2::COPY)
+        .src_access_mask(vk::AccessFlags2::TRANSFER_READ)
+        .dst_stage_mask(out.stages)
+        .dst_access_mask(out.access)
+        .old_layout(vk::ImageLayout::TRANSFER_SRC_OPTIMAL)
+        .new_layout(out.layout)
+        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+        .image(out.image)
+        .subresource_range(range);
+    // The host reads the buffer after the fence: make the copy visible to it.
+    let to_host = vk::MemoryBarrier2::default()
+        .src_stage_mask(vk::PipelineStageFlags2::COPY)
+        .src_access_mask(vk::AccessFlags2::TRANSFER_WRITE)
+        .dst_stage_mask(vk::PipelineStageFlags2::HOST)
+        .dst_access_mask(vk::AccessFlags2::HOST_READ);
     unsafe {
-        d.cmd_pipeline_barrier(
+        d.cmd_pipeline_barrier2(
             cmd,
-            all,
-            vk::PipelineStageFlags::TRANSFER,
-            vk::DependencyFlags::empty(),
-            &[],
-            &[],
-            &[barrier(
-                vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                vk::AccessFlags::MEMORY_WRITE,
-                vk::AccessFlags::TRANSFER_READ,
-            )],
+            &vk::DependencyInfo::default().image_memory_barriers(std::slice::from_ref(&to_copy)),
         );
         let layers = vk::ImageSubresourceLayers::default()
             .aspect_mask(vk::ImageAspectFlags::COLOR)
             .layer_count(1);
         d.cmd_copy_image_to_buffer(
             cmd,
-            image,
+            out.image,
             vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
             buffer,
             &[vk::BufferImageCopy::default()
                 .image_subresource(layers)
                 .image_extent(vk::Extent3D {
-                    width: w,
-                    height: h,
+                    width: out.extent.width,
+                    height: out.extent.height,
                     depth: 1,
                 })],
         );
-        d.cmd_pipeline_barrier(
+        d.cmd_pipeline_barrier2(
             cmd,
-            vk::PipelineStageFlags::TRANSFER,
-            all,
-            vk::DependencyFlags::empty(),
-            &[],
-            &[],
-            &[barrier(
-                vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                vk::AccessFlags::TRANSFER_READ,
-                vk::AccessFlags::SHADER_READ,
-            )],
-        );
-        // The host reads the buffer after the fence: make the copy visible to it.
-        d.cmd_pipeline_barrier(
-            cmd,
-            vk::PipelineStageFlags::TRANSFER,
-            vk::PipelineStageFlags::HOST,
-            vk::DependencyFlags::empty(),
-            &[vk::MemoryBarrier::default()
-                .src_access_mask(vk::AccessFlags::TRANSFER_WRITE)
-                .dst_access_mask(vk::AccessFlags::HOST_READ)],
-            &[],
-            &[],
+            &vk::DependencyInfo::default()
+                .image_memory_barriers(std::slice::from_ref(&back))
+                .memory_barriers(std::slice::from_ref(&to_host)),
         );
     }
 }

@@ -531,7 +531,7 @@ fn embeds_in_a_host_device_and_command_buffer() {
             .unwrap()[0];
         d.begin_command_buffer(cmd, &vk::CommandBufferBeginInfo::default())
             .unwrap();
-        engine.gpu().unwrap().begin(cmd);
+        engine.begin_recording(cmd).unwrap();
         engine.record_initialize(cmd).unwrap();
         engine.record_iterations(cmd, 3).unwrap();
         engine.record_draw(cmd).unwrap();
@@ -550,9 +550,8 @@ fn embeds_in_a_host_device_and_command_buffer() {
         d.destroy_fence(fence, None);
         d.destroy_command_pool(pool, None);
     }
-    let gpu = engine.gpu().unwrap().solver();
-    let names: Vec<String> = gpu
-        .read_timings()
+    let names: Vec<String> = engine
+        .recorded_timings()
         .unwrap()
         .iter()
         .map(|t| t.0.clone())
@@ -564,9 +563,7 @@ fn embeds_in_a_host_device_and_command_buffer() {
         );
     }
     assert_eq!(names.iter().filter(|n| *n == "global").count(), 3);
-    let images = gpu.images();
-    assert_ne!(images.i_total.0, vk::Image::null());
-    let gpu_ex = gpu.read_i_ex().unwrap();
+    let gpu_ex = engine.i_ex().unwrap();
     let prep = engine.prepared();
     let sys = &prep.system;
     let mut cpu = CpuSolver::new(sys);
@@ -587,8 +584,9 @@ fn embeds_in_a_host_device_and_command_buffer() {
     println!("embedded solve (float32): worst {:.2e}", ex.0);
     // Measured 2.6e-6 (float32 tables, as `cornell_box_matches_cpu`).
     assert!(ex.0 <= 8e-6, "embedded solve off by {:.2e}", ex.0);
-    let output = engine.gpu().unwrap().frame().images().output.raw;
-    assert_ne!(output, vk::Image::null());
+    let output = engine.output_image().unwrap();
+    assert_ne!(output.image, vk::Image::null());
+    assert_eq!(output.layout, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL);
     drop(engine);
     drop(embedded);
     assert_clean(&host);

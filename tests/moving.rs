@@ -232,7 +232,7 @@ fn gpu_follows_keyframed_moves_in_place() {
         &gpu.render(&Silent).unwrap().image,
         &cpu.render(&Silent).unwrap().image,
     );
-    let backend = gpu.gpu().unwrap() as *const antiradiance::engine::gpu::GpuBackend;
+    let backend = gpu.gpu_internals().unwrap() as *const antiradiance::engine::gpu::GpuBackend;
     let n = gpu.prepared().settings.iterations_per_frame;
     for t in [0.2, 0.4] {
         for e in [&mut gpu, &mut cpu] {
@@ -241,7 +241,7 @@ fn gpu_follows_keyframed_moves_in_place() {
             assert!(!e.relinked() && e.warm_started());
             e.iterate(n).unwrap();
         }
-        let g = gpu.gpu().unwrap();
+        let g = gpu.gpu_internals().unwrap();
         assert_eq!(
             backend, g as *const antiradiance::engine::gpu::GpuBackend,
             "t = {t}: the GPU backend was made anew"
@@ -282,11 +282,11 @@ fn gpu_rescales_the_held_solution_when_a_light_brightens() {
     let o = options(BackendKind::Gpu);
     let mut engine = Engine::new(&scene, &o, &Silent).unwrap();
     engine.render(&Silent).unwrap();
-    let before = engine.gpu().unwrap().solver().scale();
+    let before = engine.gpu_internals().unwrap().solver().scale();
     engine.set_light(0, light(32.0)).unwrap();
     engine.update().unwrap();
-    let after = engine.gpu().unwrap().solver().scale();
-    assert!(engine.gpu().unwrap().last_follow().in_place);
+    let after = engine.gpu_internals().unwrap().solver().scale();
+    assert!(engine.gpu_internals().unwrap().last_follow().in_place);
     assert_ne!(before, after, "the scale did not change: nothing tested");
     engine.iterate(4).unwrap();
     let frame = engine.draw().unwrap();
@@ -326,7 +326,7 @@ fn gpu_light_changing_its_views_matches_a_fresh_render() {
     engine.set_light(0, spot.clone()).unwrap();
     engine.update().unwrap();
     assert_eq!(engine.prepared().maps.views.len(), views - 5);
-    let f = engine.gpu().unwrap().last_follow();
+    let f = engine.gpu_internals().unwrap().last_follow();
     println!("point light to spot: {views} -> {} views, {f:?}", views - 5);
     engine.iterate(4).unwrap();
     let frame = engine.draw().unwrap();
@@ -394,11 +394,12 @@ fn host_moves_lights_and_refuses_fixed_objects() {
         engine.set_light(0, moved.clone()).unwrap();
         // The GPU backend before the update (a backend made anew is allocated while the old one
         // still lives, so its address differs).
-        let before = (backend == BackendKind::Gpu)
-            .then(|| engine.gpu().unwrap() as *const antiradiance::engine::gpu::GpuBackend);
+        let before = (backend == BackendKind::Gpu).then(|| {
+            engine.gpu_internals().unwrap() as *const antiradiance::engine::gpu::GpuBackend
+        });
         engine.update().unwrap();
         if let Some(b) = before {
-            let g = engine.gpu().unwrap();
+            let g = engine.gpu_internals().unwrap();
             let f = g.last_follow();
             println!("{backend:?}: follow {f:?}");
             assert_eq!(

@@ -11,6 +11,7 @@ pub mod backend;
 pub mod cpu;
 pub mod drive;
 pub mod gpu;
+mod host;
 pub mod motion;
 pub mod options;
 pub mod prepared;
@@ -19,6 +20,7 @@ mod tail;
 
 pub use backend::Backend;
 pub use drive::BATCH;
+pub use host::OutputImage;
 pub use options::{GpuTuning, Options, SolverOverrides, DEFAULT_MAX_LINKS};
 pub use prepared::{fit_system, Prepared};
 pub use stats::{IterationFrame, RenderStats, Rendered, Setup};
@@ -298,31 +300,42 @@ impl Engine {
         self.backend.take_timings()
     }
 
-    /// The GPU backend, for hosts that record into their own command buffers.
-    pub fn gpu(&mut self) -> Result<&mut gpu::GpuBackend> {
+    /// The GPU backend's internals, for this project's own tests of them (its shadow atlas,
+    /// its source scale). Not the host surface: hosts use [`Engine::output_image`],
+    /// [`Engine::recorded_timings`], [`Engine::last_update`] and the `record_*` calls.
+    #[doc(hidden)]
+    pub fn gpu_internals(&mut self) -> Result<&mut gpu::GpuBackend> {
         self.backend.as_gpu().ok_or_else(|| {
             Error::Invalid("recording into a command buffer needs the GPU backend".into())
         })
     }
 
-    /// Records the initial state into `cmd` (a host's command buffer; call
-    /// [`gpu::GpuBackend::begin`] first for timestamps).
+    /// Records the initial state (emission, the reflected direct light and environment) into
+    /// `cmd`, a host's command buffer in the recording state, after
+    /// [`Engine::begin_recording`]; the solver's images are left for the next iteration. The
+    /// command buffer must be submitted and complete before the engine is used otherwise.
     pub fn record_initialize(&mut self, cmd: vk::CommandBuffer) -> Result<()> {
-        self.gpu()?.record_initialize(cmd)
+        self.gpu_internals()?.record_initialize(cmd)
     }
 
-    /// Records `n` iterations of the settings' scheme into `cmd`.
+    /// Records `n` iterations of the settings' scheme into `cmd` (after
+    /// [`Engine::record_initialize`] or an earlier frame's iterations, in this or an earlier
+    /// completed command buffer). The convergence monitor does not run: the host decides the
+    /// count (the scene's `iterations_per_frame` is the paper's 4).
     pub fn record_iterations(&mut self, cmd: vk::CommandBuffer, n: usize) -> Result<()> {
         let (scheme, steps) = (
             self.prep.settings.scheme,
             self.prep.settings.antiradiance_steps,
         );
-        self.gpu()?.record_iterations(cmd, scheme, steps, n)
+        self.gpu_internals()?
+            .record_iterations(cmd, scheme, steps, n)
     }
 
-    /// Records the frame into `cmd`; the image is [`gpu::GpuBackend::frame`]'s `output`.
+    /// Records the frame (G-buffer, splat, compose) from the current solution into `cmd`; it
+    /// leaves [`Engine::output_image`] in the layout and state that names, for the host's
+    /// barrier before it copies, blits or samples it.
     pub fn record_draw(&mut self, cmd: vk::CommandBuffer) -> Result<()> {
-        self.gpu()?.record_draw(cmd);
+        self.gpu_internals()?.record_draw(cmd);
         Ok(())
     }
 

@@ -23,7 +23,8 @@ pub enum Access {
 }
 
 impl Access {
-    fn layout(self) -> vk::ImageLayout {
+    /// The image layout of this state.
+    pub fn layout(self) -> vk::ImageLayout {
         match self {
             Access::Undefined => vk::ImageLayout::UNDEFINED,
             Access::Attachment => vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL,
@@ -34,7 +35,8 @@ impl Access {
         }
     }
 
-    fn stage_access(self) -> (vk::PipelineStageFlags2, vk::AccessFlags2) {
+    /// The stages and accesses of this state (a later barrier's source scope).
+    pub fn stage_access(self) -> (vk::PipelineStageFlags2, vk::AccessFlags2) {
         match self {
             Access::Undefined => (vk::PipelineStageFlags2::TOP_OF_PIPE, vk::AccessFlags2::NONE),
             Access::Attachment => (

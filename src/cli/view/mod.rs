@@ -388,18 +388,15 @@ impl Viewer {
             let exposure = 2f32.powf(self.exposure as f32);
             let engine = self.engine()?;
             // Set every frame: an update that makes the frame anew starts it at 1.
-            engine.gpu()?.frame().set_exposure(exposure);
-            engine.gpu()?.begin(cmd);
+            engine.set_exposure(exposure)?;
+            engine.begin_recording(cmd)?;
             // Warm-started iterations after a change (`iterations_per_frame`), then the frame.
             engine.record_iterations(cmd, iterations)?;
             engine.record_draw(cmd)?;
-            let out = &engine.gpu()?.frame().images().output;
+            let out = engine.output_image()?;
             let src = Source {
-                image: out.raw,
-                extent: vk::Extent2D {
-                    width: out.extent.width,
-                    height: out.extent.height,
-                },
+                image: out.image,
+                extent: out.extent,
                 linear,
             };
             record_present(&d, cmd, &src, image, extent, readback.as_ref());
@@ -503,9 +500,7 @@ impl Viewer {
         let exposure = self.exposure;
         let engine = self.engine.as_mut().ok_or_else(|| anyhow!("no engine"))?;
         let status = self.playback.status(engine);
-        let gpu = engine.gpu()?;
-        let mut timings = gpu.solver().read_timings()?.to_vec();
-        timings.extend_from_slice(gpu.frame().read_timings()?);
+        let timings = engine.recorded_timings()?;
         // Summed per pass over the frame's iterations, in first-seen order.
         let mut sums: Vec<(String, f64)> = Vec::new();
         for (name, ms) in timings {
