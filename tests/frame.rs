@@ -204,36 +204,15 @@ fn per_pixel(view: &View, x: u32, y: u32, f: impl Fn(DVec3) -> Option<f64>) -> O
     Some(sum / (SUPERSAMPLE * SUPERSAMPLE) as f64)
 }
 
-/// The mean of the points `f` gives for a pixel's 2×2 sample rays, `None` if any is.
-fn per_point_mean(
-    view: &View,
-    x: u32,
-    y: u32,
-    f: impl Fn(DVec3) -> Option<DVec3>,
-) -> Option<DVec3> {
-    let mut sum = DVec3::ZERO;
-    for sy in 0..SUPERSAMPLE {
-        for sx in 0..SUPERSAMPLE {
-            let d = view.ray(
-                x as f64 + (sx as f64 + 0.5) / SUPERSAMPLE as f64,
-                y as f64 + (sy as f64 + 0.5) / SUPERSAMPLE as f64,
-            );
-            sum += f(d)?;
-        }
-    }
-    Some(sum / (SUPERSAMPLE * SUPERSAMPLE) as f64)
-}
-
 /// A lone plane (no interreflection) under one light: every pixel shows kd/π · E with E the
 /// analytic irradiance (cosine, inverse square, spot fall-off), on both backends. No iterations,
 /// float32 tables: only direct light is drawn. `bounds[light]` bounds the worst pixel on the CPU,
 /// on the GPU, and on the GPU with float16 accumulation (see `common::gpu_bound`).
 #[test]
 fn direct_light_on_a_plane_matches_analytic_irradiance() {
-    // Measured: CPU 3.7e-8, 5.8e-8, 5.6e-8, 5.9e-8 (directional, point, spot, emitter sample,
-    // the last at the 2×2 samples' mean: the f32 image's rounding); GPU 3.7e-8, 7.7e-7, 3.9e-3
-    // (the spot's fall-off), 1.5e-6. Bounds 3× those, at least 1e-5 on the GPU for another
-    // device's float32 arithmetic.
+    // Measured: CPU 3.7e-8, 5.8e-8, 5.6e-8, 5.8e-8 (directional, point, spot, emitter sample:
+    // the f32 image's rounding); GPU 3.7e-8, 7.7e-7, 3.9e-3 (the spot's fall-off), 1.3e-6.
+    // Bounds 3× those, at least 1e-5 on the GPU for another device's float32 arithmetic.
     direct_light_on_a_plane(
         None,
         [
@@ -247,8 +226,8 @@ fn direct_light_on_a_plane_matches_analytic_irradiance() {
 
 /// The same at the default settings (128 bins, τ = 1, the relative element size, 4 iterations,
 /// float16 tables): a lone plane's coplanar elements exchange nothing, so the iterations must
-/// add nothing. Measured: the same figures as without iterations (CPU 3.7e-8 … 5.9e-8, GPU
-/// 3.7e-8, 7.6e-7, 3.9e-3, 1.3e-6). Before the form factors were calibrated and emission left
+/// add nothing. Measured: the same figures as without iterations (CPU 3.7e-8 … 5.8e-8, GPU
+/// 3.7e-8, 7.6e-7, 3.9e-3, 1.1e-6). Before the form factors were calibrated and emission left
 /// the bins, the bins' Gaussian spreading leaked grazing light into the plane: 0.81%, 3.6%,
 /// 4.1%, 3.5%.
 #[test]
@@ -366,18 +345,12 @@ fn direct_light_on_a_plane(iterations: Option<usize>, bounds: [[f64; 3]; 4]) {
             let p = view.eye + d * t;
             (t > 0.0 && p.x.abs() < half && p.z.abs() < half).then_some(p)
         };
-        // An area emitter's sample lights a pixel once, at its 2×2 samples' mean, where they
-        // lie on one flat surface (frame::cpu::shared_direct); other lights per sample.
-        let shared = matches!(light, Light::EmitterSample { .. });
+        // A light of the scene's own list is evaluated per sample, even an emitter sample
+        // placed there: the frame shares only the area emitters' own samples.
         let expected = |x: u32, y: u32| {
-            if shared {
-                let mid = per_point_mean(&view, x, y, on_plane)?;
-                Some(kd / PI * irradiance(mid))
-            } else {
-                per_pixel(&view, x, y, |d| {
-                    on_plane(d).map(|p| kd / PI * irradiance(p))
-                })
-            }
+            per_pixel(&view, x, y, |d| {
+                on_plane(d).map(|p| kd / PI * irradiance(p))
+            })
         };
         for backend in [Backend::Cpu, Backend::Gpu] {
             let r = run(&s, backend, 512);

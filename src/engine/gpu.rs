@@ -25,6 +25,7 @@ pub(crate) fn frame_scene(prep: &Prepared) -> FrameScene<'_> {
     FrameScene {
         scene: &prep.scene,
         lights: &prep.lights,
+        shared_lights: (prep.shared_lights.start, prep.shared_lights.end),
         camera: &prep.camera,
         sys: &prep.system,
         surf: &prep.surfaces,
@@ -346,7 +347,7 @@ impl Backend for GpuBackend {
 
     fn set_camera(&mut self, prep: &Prepared) -> Result<()> {
         self.frame
-            .set_camera(&prep.scene, &prep.lights, &prep.camera, &prep.system)
+            .set_camera(&prep.scene, prep.lights.len(), &prep.camera, &prep.system)
     }
 
     fn take_timings(&mut self) -> Vec<(String, f64)> {

@@ -25,6 +25,10 @@ pub struct Prepared {
     /// The lights that shine: the scene's analytic lights and the samples of its area
     /// emitters ([`crate::frame::emitters`]).
     pub lights: Vec<Light>,
+    /// The lights whose direct light the frame evaluates once per pixel where its 2×2 samples
+    /// lie on one flat surface (`frame::cpu::shared_direct`): the area emitters' samples, not
+    /// instant radiosity's VPLs appended after them; empty with `solver.direct_per_sample`.
+    pub shared_lights: std::ops::Range<usize>,
     /// Effective solver settings (the scene's with the options applied).
     pub settings: SolverSettings,
     /// Effective camera.
@@ -51,13 +55,17 @@ impl Prepared {
         i_total: &crate::solver::Table,
         caster: &crate::raycast::RayCaster,
     ) -> crate::frame::Image {
+        let lit = crate::frame::lights::LightSet {
+            lights: &self.lights,
+            maps: &self.maps,
+            shared: self.shared_lights.clone(),
+        };
         crate::frame::cpu::render(
             &self.scene,
-            &self.lights,
+            &lit,
             &self.camera,
             &self.system,
             i_total,
-            &self.maps,
             &self.surfaces,
             caster,
         )
@@ -172,7 +180,13 @@ impl Prepared {
                 reason: format!("{}: area emitters shoot (no samples)", options.method),
             }
         };
+        let first_sample = lights.len();
         lights.extend(emitters::sample(scene, emitter_choice.samples));
+        let shared_lights = if settings.direct_per_sample {
+            0..0
+        } else {
+            first_sample..lights.len()
+        };
         let mut plan = Plan::new(
             scene,
             &lights,
@@ -192,6 +206,7 @@ impl Prepared {
         Ok(Self {
             scene: scene.clone(),
             lights,
+            shared_lights,
             settings,
             camera,
             target,

@@ -7,14 +7,13 @@
 use super::camera::{View, SUPERSAMPLE};
 use super::edges::{EmitterTriangles, SampleHit};
 use super::image::Image;
-use super::lights::{direct_radiance_from, emitter_sample_range, Receiver};
+use super::lights::{direct_radiance_from, LightSet, Receiver};
 use super::shading::{eye_direction, shading_normal};
-use super::shadow::ShadowMaps;
 use super::surfaces::{
     display_bin, display_radiance_in, splat_weight, vertex_values, Surfaces, MODE_VERTEX,
 };
 use crate::raycast::RayCaster;
-use crate::scene::{Camera, Light, Scene};
+use crate::scene::{Camera, Scene};
 use crate::solver::Table;
 use crate::system::System;
 use glam::DVec3;
@@ -80,14 +79,14 @@ enum Seen {
 /// Renders `camera`'s view of `scene` from the solved display intensities `i_total`.
 pub fn render(
     scene: &Scene,
-    lights: &[Light],
+    lit: &LightSet<'_>,
     camera: &Camera,
     sys: &System,
     i_total: &Table,
-    maps: &ShadowMaps,
     surf: &Surfaces,
     caster: &RayCaster,
 ) -> Image {
+    let (lights, maps) = (lit.lights, lit.maps);
     let view = View::new(camera);
     let verts = vertex_values(surf, sys, i_total, view.eye);
     let grid = SplatGrid::new(surf);
@@ -191,11 +190,7 @@ pub fn render(
     let material =
         |slot: usize| &sys.materials[sys.leaves[surf.leaf[slot] as usize].material as usize];
     // The area emitters' samples, shared among a pixel's samples (empty: none shared).
-    let shared_lights = if scene.solver.direct_per_sample {
-        0..0
-    } else {
-        emitter_sample_range(lights)
-    };
+    let shared_lights = lit.shared.clone();
     let direct_at = |f: &Front, range| {
         let r = Receiver {
             p: f.p,

@@ -120,18 +120,16 @@ pub fn brdf(mat: &Material, n: DVec3, travel: DVec3, wo: DVec3) -> DVec3 {
     f
 }
 
-/// The lights the frame shares among a pixel's samples (`frame::cpu::shared_direct`): the area
-/// emitters' samples, which the engine appends as one run; empty where they are not one run.
-pub fn emitter_sample_range(lights: &[Light]) -> Range<usize> {
-    let taken = |l: &Light| matches!(l, Light::EmitterSample { .. });
-    let Some(start) = lights.iter().position(taken) else {
-        return 0..0;
-    };
-    let end = start + lights[start..].iter().take_while(|l| taken(l)).count();
-    if lights[end..].iter().any(taken) {
-        return 0..0;
-    }
-    start..end
+/// The lights a frame shades with, their shadow maps, and the range of them whose direct light
+/// a pixel's 2×2 samples share where they lie on one flat surface (`frame::cpu::shared_direct`;
+/// the engine's `Prepared::shared_lights`: the area emitters' samples).
+pub struct LightSet<'a> {
+    /// Every light.
+    pub lights: &'a [Light],
+    /// Their shadow maps.
+    pub maps: &'a ShadowMaps,
+    /// The shared ones (empty: every light per sample).
+    pub shared: Range<usize>,
 }
 
 /// A surface point receiving light.

@@ -129,6 +129,9 @@ pub struct FrameScene<'a> {
     pub scene: &'a Scene,
     /// The lights the frame shades with.
     pub lights: &'a [Light],
+    /// The lights `start..end` whose direct light a pixel's samples share
+    /// (`Prepared::shared_lights`; `(0, 0)`: none).
+    pub shared_lights: (usize, usize),
     /// The camera (its size is the frame's).
     pub camera: &'a Camera,
     /// The discretized scene.
@@ -176,14 +179,13 @@ pub struct GpuFrame {
 }
 
 /// The frame's push constants for `camera` over `scene` (its bounds set the depth range).
-fn constants(scene: &Scene, lights: &[Light], camera: &Camera, sys: &System) -> FrameConstants {
-    // The area emitters' samples the compose pass shares among a pixel's samples (an empty
-    // range: none, every light per sample).
-    let shared = if scene.solver.direct_per_sample {
-        0..0
-    } else {
-        crate::frame::lights::emitter_sample_range(lights)
-    };
+fn constants(
+    scene: &Scene,
+    lights: usize,
+    shared: (usize, usize),
+    camera: &Camera,
+    sys: &System,
+) -> FrameConstants {
     let view = View::new(camera);
     let (lo, hi) = scene.bounds();
     let far = ((lo + hi) * 0.5 - view.eye).length() + (hi - lo).length() + 1e-6;
@@ -201,12 +203,7 @@ fn constants(scene: &Scene, lights: &[Light], camera: &Camera, sys: &System) -> 
         ],
         // y: the shadow pass's view (shadow.rs); for compose, y..z the lights whose direct
         // light a pixel's samples share.
-        misc: [
-            lights.len() as u32,
-            shared.start as u32,
-            shared.end as u32,
-            SUPERSAMPLE,
-        ],
+        misc: [lights as u32, shared.0 as u32, shared.1 as u32, SUPERSAMPLE],
     }
 }
 
@@ -232,6 +229,7 @@ impl GpuFrame {
         let FrameScene {
             scene,
             lights,
+            shared_lights,
             camera,
             sys,
             surf,
@@ -281,7 +279,7 @@ impl GpuFrame {
             i_total: None,
             exposure: 1.0,
             staged: super::staged::Staged::new(c),
-            constants: constants(scene, lights, camera, sys),
+            constants: constants(scene, lights.len(), shared_lights, camera, sys),
             profiler: Profiler::new(c, 16)?,
             ctx: ctx.clone(),
             images,
@@ -491,11 +489,12 @@ impl GpuFrame {
     }
 
     /// Draws the next frames from `camera` (its size must be the one the images were made
-    /// for: they are not reallocated); `lights` is the number of lights the frame shades.
+    /// for: they are not reallocated); `lights` is the number of lights the frame shades
+    /// (the shared ones stay those the frame was made or last followed with).
     pub fn set_camera(
         &mut self,
         scene: &Scene,
-        lights: &[Light],
+        lights: usize,
         camera: &Camera,
         sys: &System,
     ) -> Result<()> {
@@ -506,7 +505,9 @@ impl GpuFrame {
                 out.width, out.height, camera.width, camera.height
             )));
         }
-        self.constants = constants(scene, lights, camera, sys);
+        let m = self.constants.misc;
+        let shared = (m[1] as usize, m[2] as usize);
+        self.constants = constants(scene, lights, shared, camera, sys);
         Ok(())
     }
 

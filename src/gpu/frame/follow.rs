@@ -63,7 +63,7 @@ impl GpuFrame {
         self.staged.release();
         self.corner_count = data.corners.len() as u32;
         self.splat_count = pack::splat_instances(f.surf, features.splat).len() as u32;
-        self.constants = constants(f.scene, f.lights, f.camera, f.sys);
+        self.constants = constants(f.scene, f.lights.len(), f.shared_lights, f.camera, f.sys);
         // Views marked by an earlier follow and not drawn since stay marked.
         let pending = self.only.take();
         let only: Vec<bool> = maps

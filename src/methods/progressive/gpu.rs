@@ -221,7 +221,7 @@ impl Backend for GpuShooting {
 
     fn set_camera(&mut self, prep: &Prepared) -> Result<()> {
         self.frame
-            .set_camera(&prep.scene, &prep.lights, &prep.camera, &prep.system)
+            .set_camera(&prep.scene, prep.lights.len(), &prep.camera, &prep.system)
     }
 
     fn take_timings(&mut self) -> Vec<(String, f64)> {
