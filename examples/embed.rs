@@ -532,28 +532,28 @@ fn copy_to_buffer(d: &ash::Device, cmd: vk::CommandBuffer, out: &OutputImage, bu
         .aspect_mask(vk::ImageAspectFlags::COLOR)
         .level_count(1)
         .layer_count(1);
-    let to_copy = vk::ImageMemoryBarrier2::default()
-        .src_stage_mask(out.stages)
-        .src_access_mask(out.access)
-        .dst_stage_mask(vk::PipelineStageFlags2::COPY)
-        .dst_access_mask(vk::AccessFlags2::TRANSFER_READ)
-        .old_layout(out.layout)
-        .new_layout(vk::ImageLayout::TRANSFER_SRC_OPTIMAL)
-        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .image(out.image)
-        .subresource_range(range);
-    let back = vk::ImageMemoryBarrier2::default()
-        .src_stage_mask(vk::PipelineStageFlags2::COPY)
-        .src_access_mask(vk::AccessFlags2::TRANSFER_READ)
-        .dst_stage_mask(out.stages)
-        .dst_access_mask(out.access)
-        .old_layout(vk::ImageLayout::TRANSFER_SRC_OPTIMAL)
-        .new_layout(out.layout)
-        .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
-        .image(out.image)
-        .subresource_range(range);
+    // One transition of the output image: (stages, access, layout) before → after.
+    type State = (vk::PipelineStageFlags2, vk::AccessFlags2, vk::ImageLayout);
+    let transition = |from: State, to: State| {
+        vk::ImageMemoryBarrier2::default()
+            .src_stage_mask(from.0)
+            .src_access_mask(from.1)
+            .old_layout(from.2)
+            .dst_stage_mask(to.0)
+            .dst_access_mask(to.1)
+            .new_layout(to.2)
+            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .image(out.image)
+            .subresource_range(range)
+    };
+    let drawn = (out.stages, out.access, out.layout);
+    let copying = (
+        vk::PipelineStageFlags2::COPY,
+        vk::AccessFlags2::TRANSFER_READ,
+        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+    );
+    let (to_copy, back) = (transition(drawn, copying), transition(copying, drawn));
     // The host reads the buffer after the fence: make the copy visible to it.
     let to_host = vk::MemoryBarrier2::default()
         .src_stage_mask(vk::PipelineStageFlags2::COPY)

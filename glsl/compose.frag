@@ -91,12 +91,13 @@ vec3 edge_emission(ivec2 px, int ss) {
 // The samples of a pixel share one evaluation of the area emitters' direct light, at their mean
 // position, where they all face the eye on one flat surface of one material (on one face slot
 // where shading normals interpolate): that light is smooth there (a penumbra over 32 emitter
-// samples) and it is most of the frame's cost. Point, spot and directional lights stay per
-// sample: their shadow edges can be sharper than a pixel (frame/cpu.rs shared_direct).
-bool ar_shares_direct(ivec2 px, int ss, out vec3 mid, out vec3 normal_sum) {
+// samples) and it is most of the frame's cost. Point, spot and directional lights and instant
+// radiosity's VPLs stay per sample: their shadows can be sharper than a pixel (frame/cpu.rs
+// shared_direct). Returns the samples' mean position, their normals' sum and the first slot.
+bool ar_shares_direct(ivec2 px, int ss, out vec3 mid, out vec3 normal_sum, out uint slot0) {
     mid = vec3(0.0);
     normal_sum = vec3(0.0);
-    uint slot0 = 0u;
+    slot0 = 0u;
     for (int k = 0; k < ss * ss; k++) {
         ivec2 t = px * ss + ivec2(k % ss, k / ss);
         vec4 g = texelFetch(gbuf_position, t, 0);
@@ -133,13 +134,14 @@ void main() {
     vec3 emission = vec3(0.0);
     vec3 mid;
     vec3 normal_sum;
+    uint slot0;
     // The area emitters' samples, lights pc.misc.y..z (an empty range where they are not shared).
     uint a = pc.misc.y;
     uint b = pc.misc.z;
-    bool shared_direct = a < b && ar_shares_direct(px, ss, mid, normal_sum);
+    bool shared_direct = a < b && ar_shares_direct(px, ss, mid, normal_sum, slot0);
     vec3 direct = vec3(0.0);
     if (shared_direct) {
-        FrameElement e = elements[ar_gbuf_leaf(texelFetch(gbuf_position, px * ss, 0).w)];
+        FrameElement e = elements[slot0];
         vec3 n = e.face_normal.xyz;
         vec3 wo = normalize(pc.eye.xyz - mid);
         if (dot(wo, n) > 0.0) {

@@ -53,15 +53,22 @@ uint ar_front_bin(vec3 dir, vec3 n, float side) {
 
 // surfaces.rs display_radiance: I_total in the bin toward the eye, as radiance, of the leaf
 // with unit normal n, area times cosine normalization `ac` and table row `row`.
+// surfaces.rs display_radiance_in: that leaf's I_total in bin `b` (the splat's, found by the
+// G-buffer for the pixel), as radiance; zero where the bin is not in front of it.
+vec3 ar_display_radiance_in(vec3 n, float ac, uint row, uint b) {
+    float cb = dot(bin_centers[b].xyz, n);
+    if (cb <= 0.0) {
+        return vec3(0.0);
+    }
+    ivec2 t = ivec2((row / pc.sizes.w) * (ar_nu() * ar_nv()) + b, row % pc.sizes.w);
+    return texelFetch(i_total, t, 0).rgb * pc.eye.w / (ac * cb);
+}
+
 vec3 ar_display_radiance_of(vec3 n, float ac, uint row, vec3 wo) {
     if (dot(wo, n) <= 0.0) {
         return vec3(0.0);
     }
-    uint b = ar_front_bin(wo, n, 1.0);
-    float cb = dot(bin_centers[b].xyz, n);
-    uint m = ar_nu() * ar_nv();
-    ivec2 t = ivec2((row / pc.sizes.w) * m + b, row % pc.sizes.w);
-    return texelFetch(i_total, t, 0).rgb * pc.eye.w / (ac * cb);
+    return ar_display_radiance_in(n, ac, row, ar_front_bin(wo, n, 1.0));
 }
 
 // ar_display_radiance_of the leaf in slot `leaf`.

@@ -27,13 +27,7 @@ void main() {
     float bin = texelFetch(gbuf_vertex, t, 0).w;
     vec3 l = vec3(0.0);
     if (bin >= 0.0) {
-        uint b = uint(bin + 0.5);
-        float cb = dot(bin_centers[b].xyz, normal_ac.xyz);
-        if (cb > 0.0) {
-            uint row = row_surface.x;
-            ivec2 k = ivec2((row / pc.sizes.w) * (ar_nu() * ar_nv()) + b, row % pc.sizes.w);
-            l = texelFetch(i_total, k, 0).rgb * pc.eye.w / (normal_ac.w * cb);
-        }
+        l = ar_display_radiance_in(normal_ac.xyz, normal_ac.w, row_surface.x, uint(bin + 0.5));
     }
     acc = vec4(l * w, w);
 }

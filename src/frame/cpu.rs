@@ -204,9 +204,8 @@ pub fn render(
     let mut pixels = vec![[0f32; 3]; w * h];
     pixels.par_chunks_mut(w).enumerate().for_each(|(py, row)| {
         for (px, out) in row.iter_mut().enumerate() {
-            let seen: Vec<Seen> = (0..ss * ss)
-                .map(|k| sample(px, py, k % ss, k / ss).0)
-                .collect();
+            let seen: [Seen; (SUPERSAMPLE * SUPERSAMPLE) as usize] =
+                std::array::from_fn(|k| sample(px, py, k % ss, k / ss).0);
             let share = !shared_lights.is_empty();
             let shared = share.then(|| shared_direct(&seen, surf, sys)).flatten();
             let shared = shared.map(|(mid, interpolated, slot)| {

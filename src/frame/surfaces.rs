@@ -314,9 +314,7 @@ pub fn display_radiance(sys: &System, i_total: &Table, li: usize, wo: DVec3) -> 
     if wo.dot(leaf.normal) <= 0.0 {
         return DVec3::ZERO;
     }
-    let b = front_bin(&sys.bins, wo, leaf.normal, 1.0);
-    let cb = sys.bins.centers[b].dot(leaf.normal);
-    i_total.row(leaf.node as usize)[b] / (leaf.area * leaf.cos_norm * cb)
+    display_radiance_in(sys, i_total, li, front_bin(&sys.bins, wo, leaf.normal, 1.0))
 }
 
 /// The bin toward the eye of a splatted sample whose face has unit normal `n`, seen along `dir`
