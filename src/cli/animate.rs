@@ -1,42 +1,65 @@
 //! `antiradiance animate`: the frames of a scene's animation and `frames.csv` into a folder.
 
-use super::args::{SizeArgs, SolverArgs};
+use super::args::{finite, positive, SizeArgs, SolverArgs};
+use super::output::{load, scene_name};
 use super::progress::Bars;
 use antiradiance::animate::{animate, summary, FrameRecord, Sampling};
 use antiradiance::engine::Options;
 use antiradiance::frame::image::{check_output_path, write_atomic};
 use antiradiance::{BackendKind, Scene};
 use anyhow::{Context, Result};
+use clap::Args;
 use std::path::PathBuf;
 
-/// What `animate` was asked for.
+// The flags of `animate` (the variant's doc comment is its help).
+#[derive(Args)]
 pub struct AnimateArgs {
-    /// Output folder.
+    /// Scene TOML with keyframes.
+    pub scene: PathBuf,
+    /// Output directory (created if missing).
+    #[arg(long)]
     pub out: PathBuf,
-    /// Frames, if given.
+    /// Number of frames (default: the animation's duration × fps).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
     pub frames: Option<u32>,
-    /// Frames per second, if given.
+    /// Frames per second of scene time (default 24).
+    #[arg(long, value_parser = positive)]
     pub fps: Option<f64>,
-    /// Write EXR frames too.
+    /// Also write each frame as EXR (linear radiance).
+    #[arg(long)]
     pub exr: bool,
-    /// Iterations per frame, if given.
+    /// Override `solver.iterations_per_frame`.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=antiradiance::scene::MAX_ITERATIONS as i64))]
     pub iterations_per_frame: Option<u32>,
-    /// Solver overrides.
+    #[command(flatten)]
     pub solver: SolverArgs,
-    /// Image size overrides.
+    #[command(flatten)]
     pub size: SizeArgs,
-    /// PNG exposure.
+    /// PNG exposure in stops.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite)]
     pub exposure: f64,
-    /// Backend.
+    /// Which implementation solves and draws.
+    #[arg(long, value_enum, default_value_t = BackendKind::Gpu)]
     pub backend: BackendKind,
-    /// Shadow map size.
+    /// Shadow map side in texels.
+    #[arg(long, default_value_t = 1024)]
     pub shadow_map_size: u32,
-    /// Device.
+    /// Vulkan device whose name contains this (default: prefer a discrete GPU).
+    #[arg(long)]
     pub device: Option<String>,
 }
 
+impl AnimateArgs {
+    /// Loads the scene, renders its frames into `--out` and writes `frames.csv`.
+    pub fn run(self) -> Result<()> {
+        let s = load(Some(self.scene.clone()))?;
+        let name = scene_name(&s);
+        run(&s, self, &name)
+    }
+}
+
 /// Renders the frames of `scene` into `a.out`, then writes `frames.csv` and prints the rate.
-pub fn run(scene: &Scene, a: AnimateArgs, name: &str) -> Result<()> {
+fn run(scene: &Scene, a: AnimateArgs, name: &str) -> Result<()> {
     let sampling = Sampling::of(scene, a.frames.map(|n| n as usize), a.fps)?;
     let mut solver = a.solver.overrides();
     solver.iterations_per_frame = a.iterations_per_frame.map(|n| n as usize);

@@ -2,12 +2,11 @@
 //! [`Options`]; nothing is written into the scene.
 
 use antiradiance::engine::{Options, SolverOverrides};
-use antiradiance::{BackendKind, Method, Precision, Scheme};
+use antiradiance::{Precision, Scheme};
 use clap::{Args, Parser, Subcommand};
-use std::path::PathBuf;
 
 /// A finite float (clap value parser): `nan` and `inf` are refused naming the flag.
-fn finite(s: &str) -> Result<f64, String> {
+pub fn finite(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
         Ok(v) if v.is_finite() => Ok(v),
         Ok(v) => Err(format!("must be a finite number, got {v}")),
@@ -16,7 +15,7 @@ fn finite(s: &str) -> Result<f64, String> {
 }
 
 /// A positive finite float (element sizes, tolerances, error targets).
-fn positive(s: &str) -> Result<f64, String> {
+pub fn positive(s: &str) -> Result<f64, String> {
     match finite(s)? {
         v if v > 0.0 => Ok(v),
         v => Err(format!("must be positive, got {v}")),
@@ -24,7 +23,7 @@ fn positive(s: &str) -> Result<f64, String> {
 }
 
 /// A window size `WxH`, each side 1..=16384.
-fn window_size(s: &str) -> Result<(u32, u32), String> {
+pub fn window_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s
         .split_once(['x', 'X', '×'])
         .ok_or_else(|| format!("expected WxH, got `{s}`"))?;
@@ -52,261 +51,29 @@ pub struct Cli {
 #[derive(Subcommand)]
 pub enum Command {
     /// Scene statistics: triangles, elements, links, bins, memory, linking time.
-    Info {
-        /// Scene TOML (default: the bundled Cornell box).
-        scene: Option<PathBuf>,
-        /// Print JSON instead of text.
-        #[arg(long)]
-        json: bool,
-        #[command(flatten)]
-        plan: PlanArgs,
-    },
+    Info(super::info::InfoArgs),
     /// Render the scene from its camera to PNG and/or EXR (default: out.png).
-    Render {
-        /// Scene TOML (default: the bundled Cornell box).
-        scene: Option<PathBuf>,
-        /// PNG output (tone-mapped sRGB; a name ending in .exr writes linear EXR instead);
-        /// written when given, or when no --exr is given.
-        #[arg(short, long)]
-        output: Option<PathBuf>,
-        /// EXR output (linear float RGB radiance).
-        #[arg(long)]
-        exr: Option<PathBuf>,
-        /// Write statistics as JSON to this file.
-        #[arg(long)]
-        json: Option<PathBuf>,
-        /// Scene time in seconds: keyframed objects and lights as they stand then, solved from
-        /// scratch (the check for `animate`'s frames).
-        #[arg(long, allow_negative_numbers = true, value_parser = finite)]
-        time: Option<f64>,
-        #[command(flatten)]
-        solver: SolverArgs,
-        /// Iterate until the estimated error (distance to the discrete system's fixed point, not
-        /// to the true answer) is below this instead of a fixed count.
-        #[arg(long, allow_negative_numbers = true, value_parser = positive)]
-        tolerance: Option<f64>,
-        /// Iteration cap with --tolerance (default: `solver.max_iterations`, 1000).
-        #[arg(long)]
-        max_iterations: Option<usize>,
-        #[command(flatten)]
-        size: SizeArgs,
-        /// PNG exposure in stops (pixel values are multiplied by 2^exposure).
-        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite)]
-        exposure: f64,
-        /// Which implementation solves and draws.
-        #[arg(long, value_enum, default_value_t = BackendKind::Gpu)]
-        backend: BackendKind,
-        /// How global illumination is computed: the paper's method, or a baseline on the same
-        /// scene, direct light and frame (README, "Baselines").
-        #[arg(long, value_enum, default_value_t = Method::Antiradiance)]
-        method: Method,
-        #[command(flatten)]
-        baseline: BaselineArgs,
-        /// Shadow map side in texels.
-        #[arg(long, default_value_t = 1024)]
-        shadow_map_size: u32,
-        /// Vulkan device whose name contains this (default: prefer a discrete GPU).
-        #[arg(long)]
-        device: Option<String>,
-        #[command(flatten)]
-        plan: PlanArgs,
-    },
+    Render(super::render::RenderArgs),
     /// Render the scene's animation headless: DIR/frame-0000.png … (and .exr with --exr) and
     /// DIR/frames.csv (frame, time, update_ms, solve_ms, draw_ms, total_ms, iterations,
     /// residual); the first frame is solved from scratch, every later one continues from the
     /// previous with `solver.iterations_per_frame` iterations.
-    Animate {
-        /// Scene TOML with keyframes.
-        scene: PathBuf,
-        /// Output directory (created if missing).
-        #[arg(long)]
-        out: PathBuf,
-        /// Number of frames (default: the animation's duration × fps).
-        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
-        frames: Option<u32>,
-        /// Frames per second of scene time (default 24).
-        #[arg(long, value_parser = positive)]
-        fps: Option<f64>,
-        /// Also write each frame as EXR (linear radiance).
-        #[arg(long)]
-        exr: bool,
-        /// Override `solver.iterations_per_frame`.
-        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=antiradiance::scene::MAX_ITERATIONS as i64))]
-        iterations_per_frame: Option<u32>,
-        #[command(flatten)]
-        solver: SolverArgs,
-        #[command(flatten)]
-        size: SizeArgs,
-        /// PNG exposure in stops.
-        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite)]
-        exposure: f64,
-        /// Which implementation solves and draws.
-        #[arg(long, value_enum, default_value_t = BackendKind::Gpu)]
-        backend: BackendKind,
-        /// Shadow map side in texels.
-        #[arg(long, default_value_t = 1024)]
-        shadow_map_size: u32,
-        /// Vulkan device whose name contains this (default: prefer a discrete GPU).
-        #[arg(long)]
-        device: Option<String>,
-    },
+    Animate(super::animate::AnimateArgs),
     /// Path-traced ground truth (unbiased, CPU, all cores) to EXR, with its direct part and
     /// per-pixel standard error beside it (REF.direct.exr, REF.stderr.exr).
-    Reference {
-        /// Scene TOML (default: the bundled Cornell box).
-        scene: Option<PathBuf>,
-        /// Samples per pixel.
-        #[arg(long, default_value_t = 256)]
-        spp: u32,
-        /// EXR output (linear float RGB radiance).
-        #[arg(long, default_value = "reference.exr")]
-        exr: PathBuf,
-        /// Reflections per path (default: unlimited, ended by Russian roulette without bias).
-        #[arg(long)]
-        max_bounces: Option<u32>,
-        /// Seed: the same seed gives the same image on any number of threads.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-        #[command(flatten)]
-        size: SizeArgs,
-        /// Also write a PNG (exposure in stops via --exposure; a name ending in .exr writes
-        /// linear EXR instead).
-        #[arg(short, long)]
-        output: Option<PathBuf>,
-        /// PNG exposure in stops.
-        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite)]
-        exposure: f64,
-        /// Write the convergence figures as JSON to this file.
-        #[arg(long)]
-        json: Option<PathBuf>,
-    },
+    Reference(super::reference::ReferenceArgs),
     /// Error against run time: antiradiance over a sweep of settings, the baselines
     /// (hierarchical radiosity, progressive refinement, instant radiosity) and the path tracer at increasing spp,
     /// measured against a reference; writes study.csv, error-vs-time.png and convergence.png
     /// into --out.
-    Study {
-        /// Scene TOML (default: the bundled Cornell box).
-        scene: Option<PathBuf>,
-        /// Reference EXR from `antiradiance reference` (its REF.direct.exr, when present, gives
-        /// the indirect-only error). The study renders at the reference's size.
-        #[arg(long)]
-        reference: PathBuf,
-        /// Output directory.
-        #[arg(long)]
-        out: PathBuf,
-        /// Antiradiance is measured after every iteration 1..=N.
-        #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=100_000))]
-        iterations: u32,
-        /// Bin counts to try, comma-separated (default 32,64,128,256,512).
-        #[arg(long, value_delimiter = ',')]
-        bins: Option<Vec<usize>>,
-        /// Element sizes to try, comma-separated (default: the scene's ×2, ×1, ×0.5).
-        #[arg(long, value_delimiter = ',', allow_negative_numbers = true, value_parser = positive)]
-        element_sizes: Option<Vec<f64>>,
-        /// Path tracer sample counts, comma-separated (default 1,4,16,64,256).
-        #[arg(long, value_delimiter = ',')]
-        spp: Option<Vec<u32>>,
-        /// Methods measured, comma-separated (default: all four; hierarchical and progressive
-        /// radiosity run at the scene's settings, after every iteration like antiradiance;
-        /// instant radiosity once per --vpls).
-        #[arg(long, value_enum, value_delimiter = ',')]
-        methods: Option<Vec<Method>>,
-        /// hierarchical-radiosity: visibility rays per link to try, comma-separated (default
-        /// 4,16,32,141).
-        #[arg(long, value_delimiter = ',')]
-        rays_per_link: Option<Vec<u32>>,
-        /// progressive-radiosity: receiver subdivision levels to try, comma-separated (default
-        /// 0,2).
-        #[arg(long, value_delimiter = ',')]
-        subdivisions: Option<Vec<u32>>,
-        /// instant-radiosity: light paths to try, comma-separated, one image each (default
-        /// 16,64,256,1024).
-        #[arg(long, value_delimiter = ',')]
-        vpls: Option<Vec<u32>>,
-        /// Skip the run with the other iteration scheme.
-        #[arg(long)]
-        one_scheme: bool,
-        /// Skip the run with the other precision.
-        #[arg(long)]
-        one_precision: bool,
-        /// Which implementation runs antiradiance.
-        #[arg(long, value_enum, default_value_t = BackendKind::Gpu)]
-        backend: BackendKind,
-        /// Vulkan device whose name contains this.
-        #[arg(long)]
-        device: Option<String>,
-    },
+    Study(super::study::StudyArgs),
     /// Error metrics of one EXR against a reference EXR (e.g. a Mitsuba 3 render).
-    Compare {
-        /// Image to measure.
-        test: PathBuf,
-        /// Reference image.
-        reference: PathBuf,
-        /// Write a difference picture (red: brighter, blue: darker; full at ±50%).
-        #[arg(long)]
-        diff: Option<PathBuf>,
-    },
+    Compare(super::compare::CompareArgs),
     /// Open a window on the scene (GPU backend): solve, then draw from a camera you move.
     #[command(after_help = VIEW_BINDINGS)]
-    View {
-        /// Scene TOML (default: the bundled Cornell box).
-        scene: Option<PathBuf>,
-        #[command(flatten)]
-        solver: SolverArgs,
-        /// Window and frame size (default: the scene camera's `width` × `height`).
-        #[command(flatten)]
-        size: SizeArgs,
-        /// Present this many frames, then exit.
-        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1_000_000))]
-        frames: Option<u32>,
-        /// With --frames: save the last presented image (PNG, window size) here.
-        #[arg(long, requires = "frames")]
-        screenshot: Option<PathBuf>,
-        /// With --frames: resize the window to W×H (e.g. `192x160`) after the first frame (the
-        /// swapchain follows the window; the frame is scaled to fit, keeping its aspect).
-        #[arg(long, requires = "frames", value_parser = window_size)]
-        resize: Option<(u32, u32)>,
-        /// With --frames: scene seconds per frame while the animation plays (the window's own
-        /// clock otherwise).
-        #[arg(long, default_value_t = 1.0 / 30.0, requires = "frames", allow_negative_numbers = true, value_parser = positive)]
-        step: f64,
-        /// Shadow map side in texels.
-        #[arg(long, default_value_t = 1024)]
-        shadow_map_size: u32,
-        /// Exposure in stops at the start (the keys `-` and `=` change it by half a stop).
-        #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite)]
-        exposure: f64,
-        /// Vulkan device whose name contains this (default: prefer a discrete GPU).
-        #[arg(long)]
-        device: Option<String>,
-        #[command(flatten)]
-        plan: PlanArgs,
-    },
+    View(super::view::command::ViewArgs),
     /// Time the GPU passes (global, push, local, pull) per frame, like the paper's Table 2.
-    Profile {
-        /// Scene TOML (default: the bundled Cornell box).
-        scene: Option<PathBuf>,
-        /// Frames to time after warm-up (at least 1).
-        #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..=100_000))]
-        frames: u32,
-        /// Untimed warm-up frames.
-        #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(0..=100_000))]
-        warmup: u32,
-        /// Override `solver.bins`.
-        #[arg(long)]
-        bins: Option<usize>,
-        /// Override `solver.precision`.
-        #[arg(long, value_enum)]
-        precision: Option<Precision>,
-        /// Write the report as JSON to this file.
-        #[arg(long)]
-        json: Option<PathBuf>,
-        /// Vulkan device whose name contains this (default: prefer a discrete GPU).
-        #[arg(long)]
-        device: Option<String>,
-        #[command(flatten)]
-        plan: PlanArgs,
-    },
+    Profile(super::profile::ProfileArgs),
 }
 
 /// `view`'s key and mouse bindings, shown after its options in `--help`.

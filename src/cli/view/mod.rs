@@ -6,6 +6,7 @@
 //! blit of the frame image onto the swapchain image.
 
 mod camera;
+pub mod command;
 mod playback;
 mod swapchain;
 mod vulkan;

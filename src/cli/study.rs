@@ -1,0 +1,101 @@
+//! `antiradiance study`: error against run time for every method over a sweep of settings.
+
+use super::args::positive;
+use super::output::{check_outputs, load};
+use super::progress::Bars;
+use antiradiance::{BackendKind, Method};
+use anyhow::{Context, Result};
+use clap::Args;
+use std::path::PathBuf;
+
+// The flags of `study` (the variant's doc comment is its help).
+#[derive(Args)]
+pub struct StudyArgs {
+    /// Scene TOML (default: the bundled Cornell box).
+    pub scene: Option<PathBuf>,
+    /// Reference EXR from `antiradiance reference` (its REF.direct.exr, when present, gives
+    /// the indirect-only error). The study renders at the reference's size.
+    #[arg(long)]
+    pub reference: PathBuf,
+    /// Output directory.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Antiradiance is measured after every iteration 1..=N.
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    pub iterations: u32,
+    /// Bin counts to try, comma-separated (default 32,64,128,256,512).
+    #[arg(long, value_delimiter = ',')]
+    pub bins: Option<Vec<usize>>,
+    /// Element sizes to try, comma-separated (default: the scene's ×2, ×1, ×0.5).
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true, value_parser = positive)]
+    pub element_sizes: Option<Vec<f64>>,
+    /// Path tracer sample counts, comma-separated (default 1,4,16,64,256).
+    #[arg(long, value_delimiter = ',')]
+    pub spp: Option<Vec<u32>>,
+    /// Methods measured, comma-separated (default: all four; hierarchical and progressive
+    /// radiosity run at the scene's settings, after every iteration like antiradiance;
+    /// instant radiosity once per --vpls).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub methods: Option<Vec<Method>>,
+    /// hierarchical-radiosity: visibility rays per link to try, comma-separated (default
+    /// 4,16,32,141).
+    #[arg(long, value_delimiter = ',')]
+    pub rays_per_link: Option<Vec<u32>>,
+    /// progressive-radiosity: receiver subdivision levels to try, comma-separated (default
+    /// 0,2).
+    #[arg(long, value_delimiter = ',')]
+    pub subdivisions: Option<Vec<u32>>,
+    /// instant-radiosity: light paths to try, comma-separated, one image each (default
+    /// 16,64,256,1024).
+    #[arg(long, value_delimiter = ',')]
+    pub vpls: Option<Vec<u32>>,
+    /// Skip the run with the other iteration scheme.
+    #[arg(long)]
+    pub one_scheme: bool,
+    /// Skip the run with the other precision.
+    #[arg(long)]
+    pub one_precision: bool,
+    /// Which implementation runs antiradiance.
+    #[arg(long, value_enum, default_value_t = BackendKind::Gpu)]
+    pub backend: BackendKind,
+    /// Vulkan device whose name contains this.
+    #[arg(long)]
+    pub device: Option<String>,
+}
+
+impl StudyArgs {
+    /// Runs the sweep against the reference and writes study.csv and the plots.
+    pub fn run(self) -> Result<()> {
+        let s = load(self.scene)?;
+        let out = self.out;
+        std::fs::create_dir_all(&out).with_context(|| format!("{}", out.display()))?;
+        check_outputs([Some(&out.join("study.csv"))])?;
+        let truth = antiradiance::study::Truth::load(&self.reference)?;
+        if let Some(why) = truth.no_indirect_reason() {
+            eprintln!("note: {why}; the indirect-only columns stay empty");
+        }
+        let mut o = antiradiance::study::StudyOptions::defaults(&s, out.clone());
+        o.iterations = self.iterations as usize;
+        o.bins = self.bins.unwrap_or(o.bins);
+        o.element_sizes = self.element_sizes.unwrap_or(o.element_sizes);
+        o.spp = self.spp.unwrap_or(o.spp);
+        o.methods = self.methods.unwrap_or(o.methods);
+        o.rays_per_link = self.rays_per_link.unwrap_or(o.rays_per_link);
+        o.subdivisions = self.subdivisions.unwrap_or(o.subdivisions);
+        o.vpls = self.vpls.unwrap_or(o.vpls);
+        o.both_schemes = !self.one_scheme;
+        o.both_precisions = !self.one_precision;
+        o.render.backend = self.backend;
+        o.render.device = self.device;
+        let rows = antiradiance::study::run(&s, &truth, &o, &Bars::default(), &mut |r| {
+            eprintln!("{}", r.summary());
+        })?;
+        let cross = antiradiance::study::write(&rows, &out)?;
+        eprintln!("full image, relative RMSE: {cross}");
+        eprintln!(
+            "wrote {}/study.csv, error-vs-time.png, convergence.png",
+            out.display()
+        );
+        Ok(())
+    }
+}
