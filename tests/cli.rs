@@ -375,3 +375,85 @@ fn animate_flags_are_checked() {
     );
     refused(&["render", s, "--time", "nan"], 2, &["--time"]);
 }
+
+/// The CLI reports the plan: `info --json` and `render --json` list `passes`; `--all-passes`
+/// forces everything; `--target-error` picks a measured setting and says which.
+/// (The scene-adaptive pipeline's library side is tests/adaptive.rs.)
+#[test]
+fn cli_reports_passes_and_target_error() {
+    let exe = env!("CARGO_BIN_EXE_antiradiance");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/adaptive/spot-floor.toml");
+    // Every run with the validation layer on: exit status 0 and no validation message.
+    let run = |args: &[&str]| {
+        let out = std::process::Command::new(exe)
+            .env("ANTIRADIANCE_VALIDATION", "1")
+            .args(args)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert_eq!(out.status.code(), Some(0), "{args:?}: {stderr}");
+        assert!(!stderr.contains("vulkan validation"), "{args:?}: {stderr}");
+        (out.stdout, stderr)
+    };
+    let json =
+        |args: &[&str]| -> serde_json::Value { serde_json::from_slice(&run(args).0).unwrap() };
+    let s = scene.to_str().unwrap();
+    let info = json(&["info", s, "--json"]);
+    let passes: Vec<&str> = info["passes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap())
+        .collect();
+    assert!(passes.contains(&"shadow_spot") && !passes.contains(&"antiradiance"));
+    let all = json(&["info", s, "--json", "--all-passes"]);
+    assert!(all["passes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|v| v == "antiradiance"));
+    assert!(all["memory_bytes"]["tables"].as_u64() > info["memory_bytes"]["tables"].as_u64());
+    let dir = std::env::temp_dir().join(format!("ar-adaptive-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let stats = dir.join("stats.json");
+    let (stats_path, exr) = (stats.to_str().unwrap(), dir.join("out.exr"));
+    let (_, stderr) = run(&[
+        "render",
+        s,
+        "--backend",
+        "cpu",
+        "--target-error",
+        "0.6",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--json",
+        stats_path,
+        "--exr",
+        exr.to_str().unwrap(),
+    ]);
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    assert_eq!(r["passes"], info["passes"]);
+    let t = &r["target"];
+    assert!(t["measured_error"].as_f64().unwrap() <= 0.6, "{t}");
+    assert_eq!(r["bins"], t["bins"]);
+    assert!(stderr.contains("target error 0.6"), "{stderr}");
+    // The GPU backend (the default) reports the same plan, validation on.
+    run(&[
+        "render",
+        s,
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--json",
+        stats_path,
+        "--exr",
+        exr.to_str().unwrap(),
+    ]);
+    let r: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    assert_eq!(r["backend"], "gpu");
+    assert_eq!(r["passes"], info["passes"]);
+    std::fs::remove_dir_all(&dir).ok();
+}
