@@ -15,6 +15,8 @@ use glam::DVec3;
 use std::collections::HashMap;
 use std::time::Instant;
 
+mod follow;
+
 /// Per-leaf constants of the local pass (the GPU stores them as element attribute images).
 #[derive(Debug, Clone, PartialEq)]
 pub struct LeafAttributes {
@@ -280,7 +282,7 @@ impl System {
         if let Some(b) = bound {
             // The moving links' values at this pose exactly as every frame will compute them.
             let t = Instant::now();
-            b.refresh_links(&mut sys, None);
+            sys.refresh_moving_links(&b, None);
             sys.bound = Some(b);
             sys.links.linking_ms += t.elapsed().as_secs_f64() * 1e3;
         }

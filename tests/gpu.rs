@@ -429,7 +429,7 @@ fn blend_rounding_probe_reads_this_device() {
     };
     let ctx = context();
     let sum = f16_blend_sum(&ctx).unwrap();
-    let rounding = ctx.f16_blend_rounding().unwrap();
+    let rounding = antiradiance::gpu::diagnostics::f16_blend_rounding(&ctx).unwrap();
     println!(
         "{}: float16 blend probe sum {sum} → {rounding:?}",
         ctx.info.driver
@@ -476,7 +476,7 @@ fn forced_f16_accumulation_error_is_bounded() {
         )
     };
     let (table, forced) = (run(false), run(true));
-    let rounding = ctx.f16_blend_rounding().unwrap();
+    let rounding = antiradiance::gpu::diagnostics::f16_blend_rounding(&ctx).unwrap();
     println!(
         "{}: float16 accumulation (blending {rounding:?}) worst {forced:.2e}; tables float16 with this device's default accumulation {table:.2e}",
         ctx.info.driver

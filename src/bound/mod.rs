@@ -7,17 +7,17 @@
 //! [`SAMPLES_PER_SEGMENT`] steps between consecutive keys; a pair with a moving node is judged
 //! at its distance less half the largest distance a point of each moving end travels between
 //! two samples, so that the motion between samples is covered too). Pairs of static nodes are refined once, as for a
-//! still scene. Per frame [`System::follow`] moves the elements and the moving nodes and
+//! still scene. Per frame `System::follow` moves the elements and the moving nodes and
 //! recomputes, for the links with a moving node at either end only, the sides, bins, cone class
 //! and calibrated form factor, exactly as preparing the same link at that pose would; the
 //! closed scene's energy normalization λ measured at preparation is kept.
 
 use crate::bins::Bins;
-use crate::elements::{build_elements, Element};
+use crate::elements::Element;
+use crate::filter::FilterTables;
 use crate::hierarchy::{Hierarchy, NodeKind};
 use crate::linker::{self, Ctx, Link, Links, Step};
-use crate::scene::{Scene, SolverSettings};
-use crate::system::System;
+use crate::scene::Scene;
 use glam::{DMat4, DVec3};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -101,7 +101,7 @@ fn node_groups(h: &Hierarchy, element_group: &[u32]) -> Vec<u32> {
 
 /// Recomputes the center and radius of every node that is not static, as
 /// [`Hierarchy::build`] does, from the leaves below it in `els`.
-fn place_nodes(h: &mut Hierarchy, els: &[Element], node_group: &[u32]) {
+pub(crate) fn place_nodes(h: &mut Hierarchy, els: &[Element], node_group: &[u32]) {
     for (i, &g) in node_group.iter().enumerate() {
         if g == STATIC {
             continue;
@@ -310,23 +310,28 @@ pub fn build_bounded_links(
 }
 
 impl Bound {
-    /// Sets the sides, bins, cone class and calibrated form factor of every moving link from
-    /// `sys`'s current geometry (the elements and nodes where they stand), as linking that pair
+    /// Sets the sides, bins, cone class and calibrated form factor of every moving link in
+    /// `all` from the current geometry (`h` and `els` where they stand), as linking that pair
     /// there would; pairs that exchange nothing at this pose get a zero form factor. `lambda`
     /// is the energy normalization the form factors are divided by.
-    pub fn refresh_links(&self, sys: &mut System, lambda: Option<f64>) {
-        let ctx = Ctx::new(&sys.hierarchy, &sys.elements, &sys.bins, 1.0);
-        let used = &sys.links.used_classes;
-        let links = &sys.links.links;
+    pub fn refresh_links(
+        &self,
+        all: &mut Links,
+        h: &Hierarchy,
+        els: &[Element],
+        bins: &Bins,
+        filters: &FilterTables,
+        lambda: Option<f64>,
+    ) {
+        let ctx = Ctx::new(h, els, bins, 1.0);
+        let used = &all.used_classes;
+        let links = &all.links;
         let (mut fresh, silent): (Vec<Link>, Vec<bool>) = self
             .moving_links
             .par_iter()
             .map(|&i| {
                 let l = links[i as usize];
-                let (nr, ns) = (
-                    &sys.hierarchy.nodes[l.receiver as usize],
-                    &sys.hierarchy.nodes[l.sender as usize],
-                );
+                let (nr, ns) = (&h.nodes[l.receiver as usize], &h.nodes[l.sender as usize]);
                 let d = (nr.center - ns.center).length().max(f64::MIN_POSITIVE);
                 let sides = ctx.sides(l.receiver, l.sender);
                 let kept = if sides == 0 { l.sides } else { sides };
@@ -335,14 +340,8 @@ impl Bound {
                 (n, sides == 0)
             })
             .unzip();
-        linker::calibrate_links(
-            &mut fresh,
-            &sys.hierarchy,
-            &sys.elements,
-            &sys.bins,
-            &sys.filters,
-        );
-        let links = &mut sys.links.links;
+        linker::calibrate_links(&mut fresh, h, els, bins, filters);
+        let links = &mut all.links;
         for ((&i, mut l), quiet) in self.moving_links.iter().zip(fresh).zip(silent) {
             if quiet {
                 l.form_factor = 0.0;
@@ -355,23 +354,6 @@ impl Bound {
     }
 }
 
-/// Spheres (center, radius) around every moving object where `sys` has it: the top node of
-/// each group. Empty without a bound.
-pub fn moving_spheres(sys: &System) -> Vec<(DVec3, f64)> {
-    let Some(b) = &sys.bound else {
-        return Vec::new();
-    };
-    let h = &sys.hierarchy;
-    (0..h.len())
-        .filter(|&i| {
-            let g = b.node_group[i];
-            let p = h.nodes[i].parent;
-            g != STATIC && g != MIXED && (p == u32::MAX || b.node_group[p as usize] != g)
-        })
-        .map(|i| (h.nodes[i].center, h.nodes[i].radius))
-        .collect()
-}
-
 /// The used cone class nearest to `c` (a frame's link may fall in a class no sampled pose
 /// gave, between two that did; the ones next to the sampled range are marked used too).
 fn nearest_used(used: &[bool], c: u8) -> u8 {
@@ -380,59 +362,6 @@ fn nearest_used(used: &[bool], c: u8) -> u8 {
         .filter(|&k| used[k])
         .min_by_key(|&k| k.abs_diff(c))
         .unwrap_or(c) as u8
-}
-
-impl System {
-    /// Moves a system linked for its motion ([`System::bound`]) to where `scene`'s objects
-    /// stand now: the elements and moving nodes, the leaves' normals, the glossy leaves' lobe
-    /// factors and the moving links ([`Bound::refresh_links`]); nothing is relinked. Returns
-    /// false (and changes nothing) when there is no bound, or when `scene` is not this
-    /// system's scene moved rigidly (different elements), where the caller must prepare anew.
-    pub fn follow(&mut self, scene: &Scene, settings: &SolverSettings) -> crate::Result<bool> {
-        let Some(bound) = self.bound.take() else {
-            return Ok(false);
-        };
-        let result = self.follow_with(&bound, scene, settings);
-        let mut bound = bound;
-        if let Ok(true) = result {
-            bound.transforms = bound
-                .objects
-                .iter()
-                .map(|&o| scene.objects[o].transform)
-                .collect();
-        }
-        self.bound = Some(bound);
-        result
-    }
-
-    fn follow_with(
-        &mut self,
-        bound: &Bound,
-        scene: &Scene,
-        settings: &SolverSettings,
-    ) -> crate::Result<bool> {
-        let els = build_elements(scene, settings)?;
-        let same = els.len() == self.elements.len()
-            && els.iter().zip(&self.elements).all(|(a, b)| a.same_faces(b));
-        if !same {
-            return Ok(false);
-        }
-        self.elements = els;
-        place_nodes(&mut self.hierarchy, &self.elements, &bound.node_group);
-        for l in &mut self.leaves {
-            let e = &self.elements[self.hierarchy.element(l.node).expect("leaf") as usize];
-            l.normal = e.normal;
-            l.cos_norm = self.bins.cosine_normalization(e.normal);
-            l.blocks_back = e.blocks_back;
-        }
-        if self.lobes.iter().any(Option::is_some) {
-            let (norm, slot) = crate::system::lobe_factors(&self.leaves, &self.lobes, &self.bins);
-            self.lobe_norm = norm;
-            self.lobe_slot = slot;
-        }
-        bound.refresh_links(self, self.energy_normalization);
-        Ok(true)
-    }
 }
 
 #[cfg(test)]

@@ -1,7 +1,9 @@
 //! The bounded link mesh's tests: subtrees, the bound over the motion, following it.
 
 use super::*;
+use crate::elements::build_elements;
 use crate::scene::load_scene;
+use crate::system::System;
 
 /// The bundled moving Cornell box, coarse (elements 0.5, 32 bins) to keep the test short.
 fn moving_box() -> Scene {
@@ -87,7 +89,7 @@ fn follow_equals_recomputing_every_link() {
         moving_links: (0..sys.links.len() as u32).collect(),
         ..b.clone()
     };
-    every.refresh_links(&mut all, sys.energy_normalization);
+    all.refresh_moving_links(&every, sys.energy_normalization);
     let mut changed = 0;
     for (k, (a, f)) in sys.links.links.iter().zip(&all.links.links).enumerate() {
         assert_eq!((a.receiver, a.sender), pairs[k]);

@@ -149,8 +149,8 @@ impl Backend for CpuBackend {
         // The same lights see a change only along rays near the moved objects (conservative:
         // their bounding spheres before and after).
         self.reuse = (before.lights == prep.lights).then(|| {
-            let mut spheres = crate::bound::moving_spheres(&before.system);
-            spheres.extend(crate::bound::moving_spheres(&prep.system));
+            let mut spheres = before.system.moving_spheres();
+            spheres.extend(prep.system.moving_spheres());
             (before.maps.clone(), spheres)
         });
         Ok(true)

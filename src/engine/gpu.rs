@@ -239,8 +239,8 @@ impl Backend for GpuBackend {
                 return Ok(false);
             };
             report.uploaded_bytes = u.bytes;
-            moved = crate::bound::moving_spheres(&before.system);
-            moved.extend(crate::bound::moving_spheres(&prep.system));
+            moved = before.system.moving_spheres();
+            moved.extend(prep.system.moving_spheres());
         }
         let kept = self.frame.follow(&frame_scene(prep), &moved)?;
         if !kept {

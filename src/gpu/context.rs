@@ -140,7 +140,7 @@ pub struct Context {
     submit_lock: Mutex<()>,
     owned: bool,
     line_ext: bool,
-    f16_rounding: std::sync::OnceLock<super::diagnostics::BlendRounding>,
+    pub(crate) f16_rounding: std::sync::OnceLock<BlendRounding>,
     pipeline_cache: super::cache::PipelineCache,
 }
 
@@ -468,15 +468,6 @@ impl Context {
         self.pipeline_cache.raw()
     }
 
-    /// How this device rounds additive float16 blending (probed once, on first use).
-    pub fn f16_blend_rounding(self: &Arc<Self>) -> Result<super::diagnostics::BlendRounding> {
-        if let Some(r) = self.f16_rounding.get() {
-            return Ok(*r);
-        }
-        let r = super::diagnostics::f16_blend_rounding(self)?;
-        Ok(*self.f16_rounding.get_or_init(|| r))
-    }
-
     /// Whether pipelines must chain VK_EXT_line_rasterization state.
     pub fn line_rasterization_ext(&self) -> bool {
         self.line_ext
@@ -615,4 +606,14 @@ impl Drop for Context {
             }
         }
     }
+}
+
+/// How a device rounds additive blending into float16 targets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum BlendRounding {
+    /// Round to nearest (what GPUs do; errors grow as √N over N additions).
+    Nearest,
+    /// Truncation toward zero (lavapipe): every addition loses half an ulp on average, a bias
+    /// that grows as N.
+    TowardZero,
 }

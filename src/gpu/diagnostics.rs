@@ -57,15 +57,7 @@ pub fn rect_coverage(ctx: &Arc<Context>, size: (u32, u32), rects: &[[u32; 4]]) -
     draw(ctx, &layout, size, "coverage.frag", format, &records)
 }
 
-/// How a device rounds additive blending into float16 targets.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-pub enum BlendRounding {
-    /// Round to nearest (what GPUs do; errors grow as √N over N additions).
-    Nearest,
-    /// Truncation toward zero (lavapipe): every addition loses half an ulp on average, a bias
-    /// that grows as N.
-    TowardZero,
-}
+pub use super::context::BlendRounding;
 
 /// The probe's sum on a device that rounds float16 blending to nearest (69 + 7/16).
 pub const PROBE_SUM_NEAREST: f32 = 69.4375;
@@ -84,10 +76,15 @@ pub fn classify_blend_sum(sum: f32) -> BlendRounding {
     }
 }
 
-/// Adds 0.7 a hundred times into one float16 texel with additive blending and classifies the sum
-/// ([`classify_blend_sum`]).
+/// How `ctx`'s device rounds additive float16 blending: 0.7 added a hundred times into one
+/// float16 texel, the sum classified ([`classify_blend_sum`]); probed once per context, on
+/// first use (never while the context is being made).
 pub fn f16_blend_rounding(ctx: &Arc<Context>) -> Result<BlendRounding> {
-    Ok(classify_blend_sum(f16_blend_sum(ctx)?))
+    if let Some(r) = ctx.f16_rounding.get() {
+        return Ok(*r);
+    }
+    let r = classify_blend_sum(f16_blend_sum(ctx)?);
+    Ok(*ctx.f16_rounding.get_or_init(|| r))
 }
 
 /// The probe's sum: 0.7 added a hundred times into one float16 texel by additive blending.

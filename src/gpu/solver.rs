@@ -151,7 +151,7 @@ impl GpuSolver {
         let mut fallbacks = Vec::new();
         let accum_format = if opts.precision == Precision::F16
             && !opts.force_table_accumulation
-            && ctx.f16_blend_rounding()? == BlendRounding::TowardZero
+            && super::diagnostics::f16_blend_rounding(&ctx)? == BlendRounding::TowardZero
         {
             fallbacks.push(format!(
                 "{} truncates float16 blending; L_in and L_push accumulate in float32 (tables stay float16)",
