@@ -1,10 +1,8 @@
 //! Scene statistics for `antiradiance info`: sizes, linking time, memory by resource, passes.
 
+use crate::engine::planned::{DeviceLimits, Planned, Work};
 use crate::engine::{Options, Prepared};
 use crate::error::Result;
-use crate::gpu::frame::GpuFrame;
-use crate::gpu::memory::Purpose;
-use crate::gpu::resources::{table_format, ResourcePlan};
 use crate::plan::Shading;
 use crate::progress::Progress;
 use crate::scene::{Precision, Scene};
@@ -36,13 +34,16 @@ pub struct Info {
     pub linking_ms: f64,
     /// Links built per second.
     pub links_per_second: f64,
-    /// Bytes by resource: the GPU solver's images and buffers as the plan creates them (§4.1 at
-    /// the plan's precision), `frame_images` for the frame at the camera's size, `cpu_tables` for
-    /// the f64 solver.
+    /// Bytes by resource on lavapipe's limits: the GPU solver's images and buffers as the plan
+    /// creates them (§4.1 at the plan's precision), `frame_images` for the frame at the
+    /// camera's size, `cpu_tables` for the f64 solver.
     pub memory_bytes: BTreeMap<String, u64>,
-    /// The GPU passes' raster work per propagation (fragments, blended fragments, primitives;
-    /// Phong-sum terms), counted from the draw records.
-    pub work: crate::gpu::work::Work,
+    /// The GPU passes' raster work per propagation on lavapipe's limits (fragments, blended
+    /// fragments, primitives; Phong-sum terms), counted from the draw records.
+    pub work: Work,
+    /// The same plan on a discrete GPU's limits ([`DeviceLimits::discrete`]): wider images
+    /// hold more rows per column, narrower lines cut the global pass's footprints finer.
+    pub discrete_gpu: Planned,
     /// Passes a render of this scene runs, in order (the scene analysis, [`Plan::passes`]).
     pub passes: Vec<String>,
     /// What the analysis decided and why.
@@ -57,38 +58,19 @@ pub struct Info {
     pub warnings: Vec<String>,
 }
 
-/// lavapipe's maxStorageBufferRange, which `info` (no device) plans against.
-const LAVAPIPE_STORAGE_RANGE: u64 = 128 << 20;
-
 impl Info {
     /// The statistics of a prepared scene: its system, plan and the memory both would take.
-    /// GPU memory is the solver's images and buffers as [`ResourcePlan`] describes them, on a
-    /// device that rounds float16 blending (L_in and L_push in the table format, images up to
-    /// 16384 texels); a device that truncates (lavapipe) accumulates them in float32 and
-    /// `profile` reports that.
+    /// GPU memory and work are [`Prepared::planned`] on lavapipe's limits and on a discrete
+    /// GPU's.
     pub fn new(prep: &Prepared) -> Result<Self> {
         let (scene, sys, plan) = (&prep.scene, &prep.system, &prep.plan);
-        let rows = sys.rows() as u64;
-        let m = sys.bins.count as u64;
-        let format = table_format(plan.precision);
-        // Sized as on lavapipe (maxImageDimension2D 16384, lines up to 255 texels wide).
-        let resources = ResourcePlan::new(
-            sys,
-            &plan.features,
-            plan.precision,
-            format,
-            u32::MAX,
-            16384,
-            255,
-        )?;
-        let gpu = resources.memory();
-        let work = crate::gpu::work::Work::of(sys, &resources);
-        let mut mem = gpu.by_name();
-        mem.remove("total");
-        let frame = GpuFrame::planned_memory(&prep.camera, &plan.features, &prep.maps);
-        mem.insert("frame_images".into(), frame.get(Purpose::FrameImages));
-        mem.insert("shadow_maps".into(), frame.get(Purpose::ShadowMaps));
-        mem.insert("cpu_tables".into(), crate::system::cpu_table_bytes(rows, m));
+        let lavapipe = prep.planned(&DeviceLimits::lavapipe())?;
+        let mut discrete_gpu = prep.planned(&DeviceLimits::discrete())?;
+        let cpu = crate::system::cpu_table_bytes(sys.rows() as u64, sys.bins.count as u64);
+        let mut mem = lavapipe.memory_bytes;
+        mem.insert("cpu_tables".into(), cpu);
+        discrete_gpu.memory_bytes.insert("cpu_tables".into(), cpu);
+        let work = lavapipe.work;
         Ok(Self {
             scene: scene
                 .path
@@ -106,6 +88,7 @@ impl Info {
             links_per_second: sys.links.links_per_second(),
             memory_bytes: mem,
             work,
+            discrete_gpu,
             passes: plan.passes(),
             decisions: plan.decisions.clone(),
             shading: plan.shading.clone(),
@@ -117,9 +100,10 @@ impl Info {
 
     /// Prepares `scene` with `options` (no device) and gathers its statistics.
     pub fn of(scene: &Scene, options: &Options, progress: &dyn Progress) -> Result<Self> {
-        let mut info = Self::new(&Prepared::new(scene, options, None, progress)?)?;
+        let prep = Prepared::new(scene, options, None, progress)?;
+        let mut info = Self::new(&prep)?;
         let records = info.work.global.primitives;
-        let chunks = crate::gpu::links::LinkChunks::new(records, LAVAPIPE_STORAGE_RANGE).chunks;
+        let chunks = prep.planned(&DeviceLimits::lavapipe())?.link_chunks;
         info.decisions.push(format!(
             "checked against a link budget of {} (--max-links) and {}; info opens no device and assumes lavapipe's limits: maxImageDimension2D 16384, line width 255, maxStorageBufferRange 128 MiB (the {records} link records read in {chunks} range{}); on the GPU backend the tables must also fit the device's memory, which `render` checks",
             options
@@ -143,6 +127,15 @@ impl Info {
         for (k, v) in &self.memory_bytes {
             s += &format!("  {k:<22}{:>10.2} MB\n", *v as f64 / 1e6);
         }
+        let total = |m: &BTreeMap<String, u64>| m.values().sum::<u64>() as f64 / 1e6;
+        s += &format!(
+            "  (on a {} with {}-texel images and {}-texel lines: {:.2} MB in all, against {:.2} MB)\n",
+            self.discrete_gpu.limits.name,
+            self.discrete_gpu.limits.max_image_dimension,
+            self.discrete_gpu.limits.max_line_width,
+            total(&self.discrete_gpu.memory_bytes),
+            total(&self.memory_bytes)
+        );
         s += "work per propagation (fragments, blended, primitives)\n";
         for (k, w) in self.work.passes() {
             s += &format!(

@@ -8,9 +8,7 @@
 
 use crate::engine::{Engine, Options, Prepared, Setup};
 use crate::error::Result;
-use crate::gpu::memory::MemoryReport;
-use crate::gpu::reduce::Reducer;
-use crate::gpu::work::{PassWork, Work};
+use crate::engine::planned::{DeviceLimits, MemoryReport, PassWork, Work, READBACK_BYTES_PER_ITERATION};
 use crate::progress::Silent;
 use crate::scene::{Precision, Scene, Scheme};
 use crate::settings::BackendKind;
@@ -84,6 +82,9 @@ pub struct ProfileReport {
     pub device: String,
     /// Device name.
     pub device_name: String,
+    /// The limits the resources were sized by on this device (what `info` assumes for
+    /// lavapipe and a discrete GPU).
+    pub device_limits: DeviceLimits,
     /// Leaf elements.
     pub elements: usize,
     /// Links.
@@ -264,6 +265,7 @@ pub fn profile(
             .unwrap_or_default(),
         device: ctx.info.driver.clone(),
         device_name: ctx.info.name.clone(),
+        device_limits: DeviceLimits::of(ctx),
         elements: sys.leaves.len(),
         links: sys.links.links.len(),
         bins: sys.bins.count,
@@ -293,7 +295,7 @@ pub fn profile(
             .map(|(k, p)| (k.to_string(), figures(k, *p)))
             .collect(),
         glossy_terms: work.glossy_terms,
-        readback_bytes_per_iteration: Reducer::BYTES_PER_ITERATION as f64,
+        readback_bytes_per_iteration: READBACK_BYTES_PER_ITERATION as f64,
         fence_waits_per_iteration: 1.0 / batch as f64,
         paper_ms_per_iteration: PAPER_TABLE2_MS_PER_ITERATION
             .iter()

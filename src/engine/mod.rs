@@ -14,6 +14,7 @@ pub mod gpu;
 mod host;
 pub mod motion;
 pub mod options;
+pub mod planned;
 pub mod prepared;
 pub mod stats;
 mod tail;
