@@ -370,26 +370,27 @@ impl GpuFrame {
             return;
         }
         let ctx = self.ctx.clone();
-        self.profiler.begin(&ctx, cmd, "shadow");
         let p = FramePass {
             ctx: &ctx,
             cmd,
             layout: self.layouts.pipeline.raw(),
             set: self.set,
         };
-        passes::shadow::record(
-            &p,
-            &self.pipes.shadow,
-            &mut self.images,
-            self.buffers.corners.raw,
-            self.corner_count,
-            &self.shadow_rects,
-            self.only.as_deref().filter(|_| self.rendered),
-            self.constants,
-        );
-        self.only = None;
+        let only = self.only.take().filter(|_| self.rendered);
+        let (pipes, images, prof) = (&self.pipes, &mut self.images, &mut self.profiler);
+        prof.scope(&ctx, cmd, "shadow", || {
+            passes::shadow::record(
+                &p,
+                &pipes.shadow,
+                images,
+                self.buffers.corners.raw,
+                self.corner_count,
+                &self.shadow_rects,
+                only.as_deref(),
+                self.constants,
+            )
+        });
         self.rendered = true;
-        self.profiler.end(&ctx, cmd);
     }
 
     /// Renders the shadow maps and waits.
@@ -422,7 +423,6 @@ impl GpuFrame {
         let ctx = self.ctx.clone();
         let features = self.features;
         let splat = self.features.splat;
-        self.profiler.begin(&ctx, cmd, "gbuffer");
         let corners = self.buffers.corners.raw;
         let p = FramePass {
             ctx: &ctx,
@@ -430,31 +430,33 @@ impl GpuFrame {
             layout: self.layouts.pipeline.raw(),
             set: self.set,
         };
-        passes::gbuffer::record(
-            &p,
-            &self.pipes.gbuffer,
-            &mut self.images,
-            corners,
-            self.corner_count,
-            constants,
-            &features,
-        );
-        self.profiler.end(&ctx, cmd);
-        if splat {
-            self.profiler.begin(&ctx, cmd, "splat");
-            passes::splat::record(
+        let (pipes, images, prof) = (&self.pipes, &mut self.images, &mut self.profiler);
+        prof.scope(&ctx, cmd, "gbuffer", || {
+            passes::gbuffer::record(
                 &p,
-                &self.pipes.splat,
-                &mut self.images,
-                self.buffers.splats.raw,
-                self.splat_count,
+                &pipes.gbuffer,
+                images,
+                corners,
+                self.corner_count,
                 constants,
-            );
-            self.profiler.end(&ctx, cmd);
+                &features,
+            )
+        });
+        if splat {
+            prof.scope(&ctx, cmd, "splat", || {
+                passes::splat::record(
+                    &p,
+                    &pipes.splat,
+                    images,
+                    self.buffers.splats.raw,
+                    self.splat_count,
+                    constants,
+                )
+            });
         }
-        self.profiler.begin(&ctx, cmd, "compose");
-        passes::compose::record(&p, &self.pipes.compose, &mut self.images, constants);
-        self.profiler.end(&ctx, cmd);
+        prof.scope(&ctx, cmd, "compose", || {
+            passes::compose::record(&p, &pipes.compose, images, constants)
+        });
     }
 
     /// Starts a command buffer's frame timestamps (a host's; [`GpuFrame::render`] does it

@@ -92,6 +92,21 @@ impl Profiler {
         }
     }
 
+    /// Records `f` inside a named, timed scope: the debug label and the timestamp pair open
+    /// before it and close after it, together.
+    pub fn scope<T>(
+        &mut self,
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        name: &str,
+        f: impl FnOnce() -> T,
+    ) -> T {
+        self.begin(ctx, cmd, name);
+        let r = f();
+        self.end(ctx, cmd);
+        r
+    }
+
     /// Durations (ms) of the scopes of the last recording, in the order they closed. Call after
     /// the command buffer has completed.
     pub fn results(&self, ctx: &Context) -> Result<Vec<(String, f64)>> {

@@ -420,35 +420,27 @@ impl GpuSolver {
             constants: *constants,
         };
         if propagate.is_some() {
-            prof.begin(ctx, cmd, "global");
-            passes::global::record(&p, res, cur);
-            prof.end(ctx, cmd);
-            prof.begin(ctx, cmd, "push");
-            passes::push::record(&p, res);
-            prof.end(ctx, cmd);
+            prof.scope(ctx, cmd, "global", || passes::global::record(&p, res, cur));
+            prof.scope(ctx, cmd, "push", || passes::push::record(&p, res));
         } else {
-            prof.begin(ctx, cmd, "initialize");
-            let im = &mut res.images;
-            // Push leaves odd depths' incident light in L_in: both start at zero.
-            for img in [
-                &mut im.cluster_ex,
-                &mut im.cluster_ex_odd,
-                &mut im.i_total,
-                &mut im.leaf_ex0,
-                &mut im.leaf_ex1,
-                &mut im.l_in,
-                &mut im.l_push,
-            ] {
-                passes::clear(&p, img);
-            }
-            prof.end(ctx, cmd);
+            prof.scope(ctx, cmd, "initialize", || {
+                let im = &mut res.images;
+                // Push leaves odd depths' incident light in L_in: both start at zero.
+                for img in [
+                    &mut im.cluster_ex,
+                    &mut im.cluster_ex_odd,
+                    &mut im.i_total,
+                    &mut im.leaf_ex0,
+                    &mut im.leaf_ex1,
+                    &mut im.l_in,
+                    &mut im.l_push,
+                ] {
+                    passes::clear(&p, img);
+                }
+            });
         }
-        prof.begin(ctx, cmd, "local");
-        passes::local::record(&p, res, cur, m);
-        prof.end(ctx, cmd);
-        prof.begin(ctx, cmd, "pull");
-        passes::pull::record(&p, res, 1 - cur);
-        prof.end(ctx, cmd);
+        prof.scope(ctx, cmd, "local", || passes::local::record(&p, res, cur, m));
+        prof.scope(ctx, cmd, "pull", || passes::pull::record(&p, res, 1 - cur));
         *parity = 1 - cur;
     }
 
@@ -532,10 +524,10 @@ impl GpuSolver {
                 Start::PingPong
             };
             self.record_iteration(cmd, scheme, antiradiance_steps)?;
-            self.profiler.begin(&self.ctx, cmd, "reduce");
-            self.reducer
-                .record(cmd, &mut self.res, start, self.parity, i);
-            self.profiler.end(&self.ctx, cmd);
+            let (reducer, res, parity) = (&mut self.reducer, &mut self.res, self.parity);
+            self.profiler.scope(&self.ctx, cmd, "reduce", || {
+                reducer.record(cmd, res, start, parity, i)
+            });
         }
         Ok(())
     }
