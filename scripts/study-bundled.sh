@@ -22,5 +22,6 @@ for s in "${scenes[@]}"; do
   [ -f "$ref" ] || "$BIN" reference "scenes/$s.toml" --spp "$spp" --width "$size" --height "$size" \
     --seed 1 --exr "$ref" --json "$out/ref/$s.json"
   # shellcheck disable=SC2086
-  "$BIN" study "scenes/$s.toml" --reference "$ref" --out "$out/$s" ${STUDY_ARGS:-}
+  "$BIN" study "scenes/$s.toml" --reference "$ref" --out "$out/$s" --width "$size" \
+    --height "$size" ${STUDY_ARGS:-}
 done

@@ -249,6 +249,10 @@ fn study_without_indirect_light_leaves_those_columns_empty_and_says_why() {
             "cpu",
             "--iterations",
             "1",
+            "--width",
+            "8",
+            "--height",
+            "8",
         ])
         .args([
             "--bins",
@@ -270,6 +274,22 @@ fn study_without_indirect_light_leaves_those_columns_empty_and_says_why() {
         assert!(cols[18..21].iter().all(|c| c.is_empty()), "{line}");
         assert!(cols[15].parse::<f64>().unwrap().is_finite(), "{line}");
     }
+    // The study renders at the scene camera's size unless told: an 8×8 reference is refused,
+    // naming the file and the flags, before any work.
+    let (r, o2) = (reference.to_str().unwrap(), d.join("study2"));
+    refused(
+        &[
+            "study",
+            scene().to_str().unwrap(),
+            "--reference",
+            r,
+            "--out",
+            o2.to_str().unwrap(),
+        ],
+        1,
+        &["ref.exr", "8×8", "--width"],
+    );
+    assert!(!o2.exists());
 }
 
 /// A floor and a small plate above it moving on keyframes, under a moving point light.

@@ -1,6 +1,6 @@
 //! `antiradiance study`: error against run time for every method over a sweep of settings.
 
-use super::args::positive;
+use super::args::{positive, SizeArgs};
 use super::output::{check_outputs, load};
 use super::progress::Bars;
 use antiradiance::{BackendKind, Method};
@@ -14,7 +14,8 @@ pub struct StudyArgs {
     /// Scene TOML (default: the bundled Cornell box).
     pub scene: Option<PathBuf>,
     /// Reference EXR from `antiradiance reference` (its REF.direct.exr, when present, gives
-    /// the indirect-only error). The study renders at the reference's size.
+    /// the indirect-only error), at the size the study renders: the scene camera's, or
+    /// --width/--height.
     #[arg(long)]
     pub reference: PathBuf,
     /// Output directory.
@@ -55,6 +56,10 @@ pub struct StudyArgs {
     /// Skip the run with the other precision.
     #[arg(long)]
     pub one_precision: bool,
+    /// Image size: the scene camera's unless given (shrink both here and in `reference` for a
+    /// quick study).
+    #[command(flatten)]
+    pub size: SizeArgs,
     /// Which implementation runs antiradiance.
     #[arg(long, value_enum, default_value_t = BackendKind::Gpu)]
     pub backend: BackendKind,
@@ -68,12 +73,7 @@ impl StudyArgs {
     pub fn run(self) -> Result<()> {
         let s = load(self.scene)?;
         let out = self.out;
-        std::fs::create_dir_all(&out).with_context(|| format!("{}", out.display()))?;
-        check_outputs([Some(&out.join("study.csv"))])?;
         let truth = antiradiance::study::Truth::load(&self.reference)?;
-        if let Some(why) = truth.no_indirect_reason() {
-            eprintln!("note: {why}; the indirect-only columns stay empty");
-        }
         let mut o = antiradiance::study::StudyOptions::defaults(&s, out.clone());
         o.iterations = self.iterations as usize;
         o.bins = self.bins.unwrap_or(o.bins);
@@ -87,6 +87,21 @@ impl StudyArgs {
         o.both_precisions = !self.one_precision;
         o.render.backend = self.backend;
         o.render.device = self.device;
+        o.render.width = self.size.width;
+        o.render.height = self.size.height;
+        let (w, h) = antiradiance::study::study_size(&s, &o.render)?;
+        let (tw, th) = (truth.image.width, truth.image.height);
+        if (tw, th) != (w, h) {
+            anyhow::bail!(
+                "{}: the reference is {tw}×{th} but the study renders at {w}×{h} (the scene camera's size, or --width/--height); render the reference with `reference --width {w} --height {h}`, or give the study --width {tw} --height {th}",
+                self.reference.display()
+            );
+        }
+        std::fs::create_dir_all(&out).with_context(|| format!("{}", out.display()))?;
+        check_outputs([Some(&out.join("study.csv"))])?;
+        if let Some(why) = truth.no_indirect_reason() {
+            eprintln!("note: {why}; the indirect-only columns stay empty");
+        }
         let rows = antiradiance::study::run(&s, &truth, &o, &Bars::default(), &mut |r| {
             eprintln!("{}", r.summary());
         })?;

@@ -325,8 +325,15 @@ fn measure(image: &Image, truth: &Truth) -> Result<(Metrics, Option<Metrics>)> {
     Ok((full, indirect))
 }
 
-/// Runs the sweep on `scene` (its camera resized to the reference) and returns one row per
-/// image; `log` receives one line per row as it is measured.
+/// The size a study of `scene` with `render`'s options renders at: the scene camera's, or the
+/// options' width and height where given.
+pub fn study_size(scene: &Scene, render: &Options) -> Result<(u32, u32)> {
+    let c = render.resolve(scene)?.camera;
+    Ok((c.width, c.height))
+}
+
+/// Runs the sweep on `scene` at [`study_size`] against `truth`, which must be that size, and
+/// returns one row per image; `log` receives one line per row as it is measured.
 pub fn run(
     scene: &Scene,
     truth: &Truth,
@@ -340,8 +347,17 @@ pub fn run(
         ));
     }
     let mut o = o.clone();
-    o.render.width = Some(truth.image.width);
-    o.render.height = Some(truth.image.height);
+    // The study renders at the scene's own size (or `render.width`/`height`), where the path
+    // tracer's cost per pixel weighs as it does for a user; the reference must match it.
+    let (w, h) = study_size(scene, &o.render)?;
+    if (truth.image.width, truth.image.height) != (w, h) {
+        return Err(Error::Invalid(format!(
+            "the reference is {}×{} but the study renders at {w}×{h} (the scene camera's size, or --width/--height): render the reference with `reference --width {w} --height {h}`, or pass the reference's size to the study",
+            truth.image.width, truth.image.height
+        )));
+    }
+    o.render.width = Some(w);
+    o.render.height = Some(h);
     o.render.solver.iterations = Some(o.iterations);
     if o.render.backend == BackendKind::Gpu {
         o.render.context = Some(crate::engine::context_for(&o.render)?);
