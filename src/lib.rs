@@ -9,6 +9,7 @@
 #![warn(missing_docs)]
 
 pub mod animate;
+pub mod backend;
 pub mod bins;
 pub mod bound;
 pub mod brdf;

@@ -6,9 +6,11 @@
 //! the CPU, so these are the hardware-independent figures), the setup split into linking,
 //! uploads and pipelines, and the paper's own per-iteration figures for scale.
 
+use crate::engine::planned::{
+    DeviceLimits, MemoryReport, PassWork, Work, READBACK_BYTES_PER_ITERATION,
+};
 use crate::engine::{Engine, Options, Prepared, Setup};
 use crate::error::Result;
-use crate::engine::planned::{DeviceLimits, MemoryReport, PassWork, Work, READBACK_BYTES_PER_ITERATION};
 use crate::progress::Silent;
 use crate::scene::{Precision, Scene, Scheme};
 use crate::settings::BackendKind;

@@ -3,9 +3,8 @@
 //! scheme growing (restart with the asymmetric one), float16 overflowing (restart in float32),
 //! both schemes growing (keep the iterate before growth). Nothing non-finite is handed on.
 
-use super::backend::Backend;
-use super::prepared::Prepared;
 use super::tail::{Checked, Tail};
+use crate::backend::{Backend, Prepared};
 use crate::error::{Error, Result};
 use crate::progress::Progress;
 use crate::scene::Scheme;

@@ -34,8 +34,7 @@ pub struct OutputImage {
 
 impl Engine {
     fn gpu_backend(&mut self, what: &str) -> Result<&mut super::gpu::GpuBackend> {
-        self.backend
-            .as_gpu()
+        super::gpu_of(&mut self.backend)
             .ok_or_else(|| Error::Invalid(format!("{what} needs the GPU backend")))
     }
 
@@ -90,6 +89,6 @@ impl Engine {
     /// views drawn again); `None` on the CPU backend. A backend made anew reports
     /// `in_place: false`.
     pub fn last_update(&mut self) -> Option<FollowReport> {
-        self.backend.as_gpu().map(|g| g.last_follow())
+        super::gpu_of(&mut self.backend).map(|g| g.last_follow())
     }
 }

@@ -7,19 +7,15 @@
 //! the same steps into its own command buffers ([`Engine::record_initialize`],
 //! [`Engine::record_iterations`], [`Engine::record_draw`]).
 
-pub mod backend;
-pub mod cpu;
 pub mod drive;
-pub mod gpu;
 mod host;
 pub mod motion;
-pub mod options;
 pub mod planned;
-pub mod prepared;
 pub mod stats;
 mod tail;
 
-pub use backend::Backend;
+pub use crate::backend::{options, prepared, Backend, Draw, Solve};
+pub use crate::methods::antiradiance::{cpu, gpu};
 pub use drive::BATCH;
 pub use host::OutputImage;
 pub use options::{GpuTuning, Options, SolverOverrides, DEFAULT_MAX_LINKS};
@@ -128,7 +124,7 @@ impl Engine {
         progress: &dyn Progress,
     ) -> Result<Self> {
         let setup_start = Instant::now();
-        let mut backend = backend::create(options, &mut prep, ctx)?;
+        let mut backend = crate::methods::create(options, &mut prep, ctx)?;
         let created_ms = ms(setup_start);
         let method_ms = backend.method_report().map_or(0.0, |r| r.setup_ms);
         let mut fallbacks = prep.fallbacks.clone();
@@ -145,8 +141,7 @@ impl Engine {
         if lights {
             progress.end();
         }
-        let gpu = backend
-            .as_gpu()
+        let gpu = gpu_of(&mut backend)
             .map(|g| g.setup_times())
             .unwrap_or_default();
         let setup = Setup {
@@ -213,7 +208,7 @@ impl Engine {
 
     /// The raster work of one GPU propagation (`None` for the CPU backend).
     pub fn work(&mut self) -> Option<Work> {
-        self.backend.as_gpu().map(|g| g.work())
+        gpu_of(&mut self.backend).map(|g| g.work())
     }
 
     /// How long preparing this engine took, by part.
@@ -306,7 +301,7 @@ impl Engine {
     /// [`Engine::recorded_timings`], [`Engine::last_update`] and the `record_*` calls.
     #[doc(hidden)]
     pub fn gpu_internals(&mut self) -> Result<&mut gpu::GpuBackend> {
-        self.backend.as_gpu().ok_or_else(|| {
+        gpu_of(&mut self.backend).ok_or_else(|| {
             Error::Invalid("recording into a command buffer needs the GPU backend".into())
         })
     }
@@ -461,4 +456,9 @@ impl Engine {
 /// [`Engine::render`].
 pub fn render(scene: &Scene, options: &Options, progress: &dyn Progress) -> Result<Rendered> {
     Engine::new(scene, options, progress)?.render(progress)
+}
+
+/// The GPU antiradiance backend behind `b`, if that is what it is (or wraps).
+fn gpu_of(b: &mut Box<dyn Backend>) -> Option<&mut gpu::GpuBackend> {
+    b.recorder().downcast_mut::<gpu::GpuBackend>()
 }

@@ -26,7 +26,6 @@
 //!   objects are linked for their motion again, so later `set_time` updates follow the new
 //!   bound.
 
-use super::backend;
 use super::prepared::Prepared;
 use super::Engine;
 use crate::error::{Error, Result};
@@ -138,7 +137,7 @@ impl Engine {
         };
         let ms = |t: Instant| t.elapsed().as_secs_f64() * 1e3;
         let t = Instant::now();
-        let ctx = self.backend.as_gpu().map(|g| g.context().clone());
+        let ctx = super::gpu_of(&mut self.backend).map(|g| g.context().clone());
         let memory = ctx.as_ref().map(|c| c.info.device_local_bytes);
         // Only lights moved: the elements and links stay (no relinking), the solution carries
         // over row for row.
@@ -183,7 +182,7 @@ impl Engine {
             } else {
                 Some(old)
             };
-            self.backend = backend::create(&self.options, &mut prep, ctx)?;
+            self.backend = crate::methods::create(&self.options, &mut prep, ctx)?;
             warm
         };
         let backend_ms = ms(t1);
@@ -222,11 +221,11 @@ impl Engine {
     /// the update first). A new source scale (a light made much brighter) reads the solution
     /// back and uploads it rescaled, here too.
     pub fn record_update(&mut self, cmd: vk::CommandBuffer) -> Result<()> {
-        if let Some(g) = self.backend.as_gpu() {
+        if let Some(g) = super::gpu_of(&mut self.backend) {
             g.record_follow_into(Some(cmd));
         }
         let out = self.update();
-        if let Some(g) = self.backend.as_gpu() {
+        if let Some(g) = super::gpu_of(&mut self.backend) {
             g.record_follow_into(None);
         }
         out

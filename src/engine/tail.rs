@@ -1,12 +1,11 @@
 //! When and how the drive loop sums a stiff iteration's tail ([`crate::solver::extrapolate`]):
 //! a snapshot of I_ex once the changes contract slowly, the extrapolation [`SPAN`] iterations
 //! later where one mode dominates, and its undoing if the next change is not smaller. It works
-//! through [`Backend::i_ex`] and [`Backend::warm_start`], so both backends run the same
+//! through [`Solve::i_ex`] and [`Solve::warm_start`], so both backends run the same
 //! arithmetic (in f64 on the host; the GPU's tables are read back and uploaded, a few times per
 //! solve and only in stiff scenes).
 
-use super::backend::Backend;
-use super::prepared::Prepared;
+use crate::backend::{Backend, Prepared};
 use crate::error::Result;
 use crate::solver::convergence::Monitor;
 use crate::solver::extrapolate::{extrapolate, tail_factor, SPAN, STIFF};

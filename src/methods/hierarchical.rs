@@ -10,7 +10,7 @@
 
 use super::visibility::link_visibility;
 use super::{MethodReport, MethodSettings};
-use crate::engine::{Backend, Prepared};
+use crate::backend::{Backend, Draw, Prepared, Solve};
 use crate::error::{Error, Result};
 use crate::frame::Image;
 use crate::gpu::memory::MemoryReport;
@@ -96,13 +96,7 @@ impl HierarchicalBackend {
     }
 }
 
-impl Backend for HierarchicalBackend {
-    fn kind(&self) -> BackendKind {
-        self.inner.kind()
-    }
-    fn device(&self) -> String {
-        self.inner.device()
-    }
+impl Solve for HierarchicalBackend {
     fn prepare_lights(&mut self, prep: &mut Prepared) -> Result<()> {
         self.inner.prepare_lights(prep)
     }
@@ -131,28 +125,40 @@ impl Backend for HierarchicalBackend {
     fn widen(&mut self, prep: &Prepared) -> Result<Option<String>> {
         self.inner.widen(prep)
     }
+    fn precision(&self) -> Precision {
+        self.inner.precision()
+    }
+    fn method_report(&self) -> Option<MethodReport> {
+        Some(self.report.clone())
+    }
+}
+
+impl Draw for HierarchicalBackend {
     fn draw(&mut self, prep: &Prepared) -> Result<Image> {
         self.inner.draw(prep)
     }
     fn set_camera(&mut self, prep: &Prepared) -> Result<()> {
         self.inner.set_camera(prep)
     }
+}
+
+impl Backend for HierarchicalBackend {
+    fn kind(&self) -> BackendKind {
+        self.inner.kind()
+    }
+    fn device(&self) -> String {
+        self.inner.device()
+    }
     fn take_timings(&mut self) -> Vec<(String, f64)> {
         self.inner.take_timings()
-    }
-    fn precision(&self) -> Precision {
-        self.inner.precision()
     }
     fn fallbacks(&self) -> Vec<String> {
         self.inner.fallbacks()
     }
+    fn recorder(&mut self) -> &mut dyn std::any::Any {
+        self.inner.recorder()
+    }
     fn memory(&self) -> MemoryReport {
         self.inner.memory()
-    }
-    fn as_gpu(&mut self) -> Option<&mut crate::engine::gpu::GpuBackend> {
-        self.inner.as_gpu()
-    }
-    fn method_report(&self) -> Option<MethodReport> {
-        Some(self.report.clone())
     }
 }

@@ -6,7 +6,7 @@
 //! I_total from a link-less [`GpuSolver`] holding zeros. An iteration does nothing: the solve is
 //! the tracing.
 
-use crate::engine::{Backend, Prepared};
+use crate::backend::{Backend, Draw, Prepared, Solve};
 use crate::error::Result;
 use crate::frame::Image;
 use crate::gpu::frame::GpuFrame;
@@ -66,22 +66,13 @@ impl CpuInstant {
     }
 }
 
-impl Backend for CpuInstant {
-    fn kind(&self) -> BackendKind {
-        BackendKind::Cpu
-    }
-    fn device(&self) -> String {
-        "cpu".into()
-    }
+impl Solve for CpuInstant {
     fn prepare_lights(&mut self, prep: &mut Prepared) -> Result<()> {
         let t = Instant::now();
         if !prep.maps.views.is_empty() {
             prep.maps.render_cpu(&self.caster);
         }
         self.timings.push(("shadow".into(), ms(t)));
-        Ok(())
-    }
-    fn initialize(&mut self, _: &Prepared) -> Result<()> {
         Ok(())
     }
     fn iterate_batch(
@@ -99,39 +90,26 @@ impl Backend for CpuInstant {
     fn i_total(&mut self) -> Result<Table> {
         Ok(self.display.clone())
     }
-    fn overflow_limit(&self) -> f64 {
-        f64::MAX
+    fn method_report(&self) -> Option<MethodReport> {
+        Some(self.report.clone())
     }
-    fn widen(&mut self, _: &Prepared) -> Result<Option<String>> {
-        Ok(None)
-    }
+}
+
+impl Draw for CpuInstant {
     fn draw(&mut self, prep: &Prepared) -> Result<Image> {
         let t = Instant::now();
         let image = prep.render_cpu(&self.display, &self.caster);
         self.timings.push(("frame".into(), ms(t)));
         Ok(image)
     }
-    fn set_camera(&mut self, _: &Prepared) -> Result<()> {
-        // The ray-cast frame reads `prep.camera` at every draw.
-        Ok(())
+}
+
+impl Backend for CpuInstant {
+    fn kind(&self) -> BackendKind {
+        BackendKind::Cpu
     }
     fn take_timings(&mut self) -> Vec<(String, f64)> {
         std::mem::take(&mut self.timings)
-    }
-    fn precision(&self) -> Precision {
-        Precision::F64
-    }
-    fn fallbacks(&self) -> Vec<String> {
-        Vec::new()
-    }
-    fn memory(&self) -> MemoryReport {
-        MemoryReport::default()
-    }
-    fn as_gpu(&mut self) -> Option<&mut crate::engine::gpu::GpuBackend> {
-        None
-    }
-    fn method_report(&self) -> Option<MethodReport> {
-        Some(self.report.clone())
     }
 }
 
@@ -166,7 +144,7 @@ impl GpuInstant {
             },
         )?;
         display.upload_i_total(&zeros(prep))?;
-        let frame = crate::engine::gpu::frame_for(&ctx, prep, &display)?;
+        let frame = crate::methods::antiradiance::gpu::frame_for(&ctx, prep, &display)?;
         Ok(Self {
             ctx,
             display,
@@ -178,21 +156,12 @@ impl GpuInstant {
     }
 }
 
-impl Backend for GpuInstant {
-    fn kind(&self) -> BackendKind {
-        BackendKind::Gpu
-    }
-    fn device(&self) -> String {
-        self.ctx.info.name.clone()
-    }
+impl Solve for GpuInstant {
     fn prepare_lights(&mut self, prep: &mut Prepared) -> Result<()> {
         if !prep.maps.views.is_empty() {
             self.frame.render_shadow_maps()?;
             self.pending.extend(self.frame.timings().iter().cloned());
         }
-        Ok(())
-    }
-    fn initialize(&mut self, _: &Prepared) -> Result<()> {
         Ok(())
     }
     fn iterate_batch(
@@ -210,12 +179,15 @@ impl Backend for GpuInstant {
     fn i_total(&mut self) -> Result<Table> {
         Ok(Table::zeros(self.shape.0, self.shape.1))
     }
-    fn overflow_limit(&self) -> f64 {
-        f64::MAX
+    fn precision(&self) -> Precision {
+        self.display.precision()
     }
-    fn widen(&mut self, _: &Prepared) -> Result<Option<String>> {
-        Ok(None)
+    fn method_report(&self) -> Option<MethodReport> {
+        Some(self.report.clone())
     }
+}
+
+impl Draw for GpuInstant {
     fn draw(&mut self, _: &Prepared) -> Result<Image> {
         let image = self.frame.render(&mut self.display)?;
         self.pending.extend(self.frame.timings().iter().cloned());
@@ -223,25 +195,21 @@ impl Backend for GpuInstant {
     }
     fn set_camera(&mut self, prep: &Prepared) -> Result<()> {
         // The VPLs are lights of `prep`, so its light count includes them.
-        self.frame
-            .set_camera(&prep.scene, prep.lights.len(), &prep.camera, &prep.system)
+        crate::methods::antiradiance::gpu::take_camera(&mut self.frame, prep)
+    }
+}
+
+impl Backend for GpuInstant {
+    fn kind(&self) -> BackendKind {
+        BackendKind::Gpu
+    }
+    fn device(&self) -> String {
+        self.ctx.info.name.clone()
     }
     fn take_timings(&mut self) -> Vec<(String, f64)> {
         std::mem::take(&mut self.pending)
     }
-    fn precision(&self) -> Precision {
-        self.display.precision()
-    }
-    fn fallbacks(&self) -> Vec<String> {
-        Vec::new()
-    }
     fn memory(&self) -> MemoryReport {
         self.display.memory()
-    }
-    fn as_gpu(&mut self) -> Option<&mut crate::engine::gpu::GpuBackend> {
-        None
-    }
-    fn method_report(&self) -> Option<MethodReport> {
-        Some(self.report.clone())
     }
 }

@@ -31,7 +31,7 @@
 pub mod backend;
 
 use super::{MethodReport, MethodSettings, Sequence};
-use crate::engine::{Options, Prepared};
+use crate::backend::{Options, Prepared};
 use crate::error::{Error, Result};
 use crate::frame::emitters;
 use crate::raycast::RayCaster;
@@ -45,9 +45,7 @@ use std::time::Instant;
 /// Most surface hits of one light path (Russian roulette ends nearly all paths before).
 pub const MAX_BOUNCES: usize = 16;
 
-/// Side (texels) of a VPL's shadow-map faces: VPLs are many and their light is soft, so their
-/// maps can be smaller than an emitter sample's (README, "Instant radiosity").
-pub const VPL_MAP_SIZE: u32 = 64;
+pub use crate::backend::method::VPL_MAP_SIZE;
 
 /// The traced VPLs and what tracing them cost.
 #[derive(Debug, Clone, Default)]

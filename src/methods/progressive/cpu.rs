@@ -7,14 +7,13 @@ use super::{
     direct_irradiance, environment_irradiance, facing, kernel, receive, shots_per_iteration,
     surface_offset, Elements, State, TableShape,
 };
-use crate::engine::{Backend, Prepared};
+use crate::backend::{Backend, Draw, Prepared, Solve};
 use crate::error::Result;
 use crate::frame::lights::direct_in_table;
 use crate::frame::Image;
-use crate::gpu::memory::MemoryReport;
 use crate::methods::{MethodReport, MethodSettings, Shot};
 use crate::raycast::RayCaster;
-use crate::scene::{Precision, Scheme};
+use crate::scene::Scheme;
 use crate::settings::BackendKind;
 use crate::solver::convergence::{Change, Figures};
 use crate::solver::Table;
@@ -135,15 +134,7 @@ impl CpuShooting {
     }
 }
 
-impl Backend for CpuShooting {
-    fn kind(&self) -> BackendKind {
-        BackendKind::Cpu
-    }
-
-    fn device(&self) -> String {
-        "cpu".into()
-    }
-
+impl Solve for CpuShooting {
     fn prepare_lights(&mut self, prep: &mut Prepared) -> Result<()> {
         let t = Instant::now();
         if !prep.maps.views.is_empty() {
@@ -160,14 +151,12 @@ impl Backend for CpuShooting {
         self.timings.push(("direct".into(), ms(t)));
         Ok(())
     }
-
     fn initialize(&mut self, _: &Prepared) -> Result<()> {
         self.state = State::initial(&self.els, &self.direct, &self.environment);
         self.initial = self.state.unshot_power(&self.els);
         self.report.shots.clear();
         Ok(())
     }
-
     fn iterate_batch(
         &mut self,
         _: &Prepared,
@@ -204,23 +193,21 @@ impl Backend for CpuShooting {
         self.timings.push(("shoot".into(), ms(t)));
         Ok(figures)
     }
-
     fn i_ex(&mut self) -> Result<Table> {
         Ok(self.shape.exitant(&self.els, &self.state))
     }
-
     fn i_total(&mut self) -> Result<Table> {
         Ok(self.shape.display(&self.els, &self.state.gathered))
     }
-
-    fn overflow_limit(&self) -> f64 {
-        f64::MAX
+    fn method_report(&self) -> Option<MethodReport> {
+        let mut r = self.report.clone();
+        r.figures
+            .insert("shots".into(), self.report.shots.len() as f64);
+        Some(r)
     }
+}
 
-    fn widen(&mut self, _: &Prepared) -> Result<Option<String>> {
-        Ok(None)
-    }
-
+impl Draw for CpuShooting {
     fn draw(&mut self, prep: &Prepared) -> Result<Image> {
         let t = Instant::now();
         let table = self.shape.display(&self.els, &self.state.gathered);
@@ -228,36 +215,16 @@ impl Backend for CpuShooting {
         self.timings.push(("frame".into(), ms(t)));
         Ok(image)
     }
+}
 
-    fn set_camera(&mut self, _: &Prepared) -> Result<()> {
-        // The ray-cast frame reads `prep.camera` at every draw.
-        Ok(())
+impl Backend for CpuShooting {
+    fn kind(&self) -> BackendKind {
+        BackendKind::Cpu
     }
-
     fn take_timings(&mut self) -> Vec<(String, f64)> {
         std::mem::take(&mut self.timings)
     }
-
-    fn precision(&self) -> Precision {
-        Precision::F64
-    }
-
     fn fallbacks(&self) -> Vec<String> {
         self.notes.clone()
-    }
-
-    fn memory(&self) -> MemoryReport {
-        MemoryReport::default()
-    }
-
-    fn as_gpu(&mut self) -> Option<&mut crate::engine::gpu::GpuBackend> {
-        None
-    }
-
-    fn method_report(&self) -> Option<MethodReport> {
-        let mut r = self.report.clone();
-        r.figures
-            .insert("shots".into(), self.report.shots.len() as f64);
-        Some(r)
     }
 }

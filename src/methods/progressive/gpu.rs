@@ -9,7 +9,7 @@ use super::{
     direct_irradiance, environment_irradiance, shots_per_iteration, surface_offset, Elements,
     State, TableShape,
 };
-use crate::engine::{Backend, Prepared};
+use crate::backend::{Backend, Draw, Prepared, Solve};
 use crate::error::Result;
 use crate::frame::lights::direct_in_table;
 use crate::frame::Image;
@@ -93,7 +93,7 @@ impl GpuShooting {
             ctx.clone(),
             &FrameScene {
                 sys,
-                ..crate::engine::gpu::frame_scene(prep)
+                ..crate::methods::antiradiance::gpu::frame_scene(prep)
             },
         )?;
         frame.bind_solver(&display);
@@ -122,15 +122,7 @@ impl GpuShooting {
     }
 }
 
-impl Backend for GpuShooting {
-    fn kind(&self) -> BackendKind {
-        BackendKind::Gpu
-    }
-
-    fn device(&self) -> String {
-        self.ctx.info.name.clone()
-    }
-
+impl Solve for GpuShooting {
     fn prepare_lights(&mut self, prep: &mut Prepared) -> Result<()> {
         self.direct = vec![DVec3::ZERO; self.els.len()];
         if !prep.maps.views.is_empty() {
@@ -142,7 +134,6 @@ impl Backend for GpuShooting {
         }
         Ok(())
     }
-
     fn initialize(&mut self, _: &Prepared) -> Result<()> {
         let state = State::initial(&self.els, &self.direct, &self.environment);
         self.initial = state.unshot_power(&self.els);
@@ -150,7 +141,6 @@ impl Backend for GpuShooting {
         self.report.shots.clear();
         Ok(())
     }
-
     fn iterate_batch(
         &mut self,
         _: &Prepared,
@@ -185,7 +175,6 @@ impl Backend for GpuShooting {
         }
         Ok(figures)
     }
-
     fn i_ex(&mut self) -> Result<Table> {
         let gathered = self.shooter.gathered()?;
         let state = State {
@@ -195,19 +184,21 @@ impl Backend for GpuShooting {
         };
         Ok(self.shape.exitant(&self.els, &state))
     }
-
     fn i_total(&mut self) -> Result<Table> {
         self.display_table()
     }
-
-    fn overflow_limit(&self) -> f64 {
-        f64::MAX
+    fn precision(&self) -> Precision {
+        Precision::F32
     }
-
-    fn widen(&mut self, _: &Prepared) -> Result<Option<String>> {
-        Ok(None)
+    fn method_report(&self) -> Option<MethodReport> {
+        let mut r = self.report.clone();
+        r.figures
+            .insert("shots".into(), self.report.shots.len() as f64);
+        Some(r)
     }
+}
 
+impl Draw for GpuShooting {
     fn draw(&mut self, _: &Prepared) -> Result<Image> {
         let t = Instant::now();
         let table = self.display_table()?;
@@ -218,38 +209,27 @@ impl Backend for GpuShooting {
         self.pending.extend(self.frame.timings().iter().cloned());
         Ok(image)
     }
-
     fn set_camera(&mut self, prep: &Prepared) -> Result<()> {
-        self.frame
-            .set_camera(&prep.scene, prep.lights.len(), &prep.camera, &prep.system)
+        crate::methods::antiradiance::gpu::take_camera(&mut self.frame, prep)
     }
+}
 
+impl Backend for GpuShooting {
+    fn kind(&self) -> BackendKind {
+        BackendKind::Gpu
+    }
+    fn device(&self) -> String {
+        self.ctx.info.name.clone()
+    }
     fn take_timings(&mut self) -> Vec<(String, f64)> {
         std::mem::take(&mut self.pending)
     }
-
-    fn precision(&self) -> Precision {
-        Precision::F32
-    }
-
     fn fallbacks(&self) -> Vec<String> {
         self.notes.clone()
     }
-
     fn memory(&self) -> MemoryReport {
         let mut m = self.display.memory();
         m.add(Purpose::Tables, self.shooter.bytes());
         m
-    }
-
-    fn as_gpu(&mut self) -> Option<&mut crate::engine::gpu::GpuBackend> {
-        None
-    }
-
-    fn method_report(&self) -> Option<MethodReport> {
-        let mut r = self.report.clone();
-        r.figures
-            .insert("shots".into(), self.report.shots.len() as f64);
-        Some(r)
     }
 }

@@ -327,7 +327,7 @@ impl TableShape {
     }
 
     /// The exitant table I_ex of a state (all radiosity, emission included), for
-    /// [`crate::engine::Backend::i_ex`].
+    /// [`crate::backend::Solve::i_ex`].
     pub fn exitant(&self, els: &Elements, state: &State) -> Table {
         self.leaf_table(|i| state.radiosity(els, i) / PI)
     }

@@ -70,7 +70,7 @@ pub struct GpuTuning {
     pub link_range: Option<u64>,
 }
 
-/// Options of an [`super::Engine`] beyond the scene's own settings.
+/// Options of an [`crate::engine::Engine`] beyond the scene's own settings.
 #[derive(Clone)]
 pub struct Options {
     /// Which implementation solves and draws.
@@ -101,7 +101,7 @@ pub struct Options {
     /// GPU knobs for tests.
     pub gpu: GpuTuning,
     /// Settings of the baseline methods (rays per link, hemicube, subdivision, shots).
-    pub baseline: crate::methods::MethodSettings,
+    pub baseline: super::method::MethodSettings,
     /// Link budget (`--max-links`; `None`: [`DEFAULT_MAX_LINKS`]): a scene whose links at its
     /// settings would pass it is linked coarser (a larger τ, then a larger element size) until
     /// it fits, each step stated in the plan's decisions.
@@ -127,7 +127,7 @@ impl Default for Options {
             all_passes: false,
             target_error: None,
             gpu: GpuTuning::default(),
-            baseline: crate::methods::MethodSettings::default(),
+            baseline: super::method::MethodSettings::default(),
             max_links: None,
             memory_budget: None,
         }

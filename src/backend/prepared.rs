@@ -1,6 +1,6 @@
 //! The prepared scene: everything the CPU builds before a backend runs — the effective settings
 //! and camera, the discrete system (elements, hierarchy, links), the screen surfaces, the plan
-//! and the shadow-map views. `info` stops here; an [`super::Engine`] adds a backend.
+//! and the shadow-map views. `info` stops here; an [`crate::engine::Engine`] adds a backend.
 
 use super::options::{Options, Resolved, DEFAULT_MAX_LINKS};
 use crate::error::{Error, Result};
@@ -382,7 +382,7 @@ pub fn fit_system(
 
 /// Every light's shadow-map views in one atlas of at most [`MAX_ATLAS`]² texels: analytic
 /// lights' maps at `size`², emitter samples' at [`emitters::SAMPLE_MAP_SIZE`]², VPLs (lights from
-/// `first_vpl` on) at [`crate::methods::instant::VPL_MAP_SIZE`]²; all halved together until they
+/// `first_vpl` on) at [`super::method::VPL_MAP_SIZE`]²; all halved together until they
 /// fit, each halving a fallback sentence.
 pub fn fit_shadow_maps(
     scene: &Scene,
@@ -391,11 +391,8 @@ pub fn fit_shadow_maps(
     first_vpl: usize,
 ) -> Result<(ShadowMaps, Vec<String>)> {
     let mut fallbacks = Vec::new();
-    let (mut size, mut sample, mut vpl) = (
-        size,
-        emitters::SAMPLE_MAP_SIZE,
-        crate::methods::instant::VPL_MAP_SIZE,
-    );
+    let (mut size, mut sample, mut vpl) =
+        (size, emitters::SAMPLE_MAP_SIZE, super::method::VPL_MAP_SIZE);
     loop {
         let sides: Vec<u32> = lights
             .iter()

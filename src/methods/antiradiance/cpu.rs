@@ -1,13 +1,11 @@
 //! The CPU backend: the f64 solver (the specification the GPU must equal) and a ray-cast frame.
 
-use super::backend::Backend;
-use super::prepared::Prepared;
+use crate::backend::{Backend, Draw, Prepared, Solve};
 use crate::error::Result;
 use crate::frame::lights::direct_in_table;
 use crate::frame::Image;
-use crate::gpu::memory::MemoryReport;
 use crate::raycast::RayCaster;
-use crate::scene::{Precision, Scheme};
+use crate::scene::Scheme;
 use crate::settings::BackendKind;
 use crate::solver::convergence::Figures;
 use crate::solver::{CpuSolver, CpuState, Table};
@@ -22,7 +20,7 @@ pub struct CpuBackend {
     state: Option<CpuState>,
     caster: RayCaster,
     timings: Vec<(String, f64)>,
-    /// After a bounded move ([`Backend::follow`]): the previous shadow maps and spheres around
+    /// After a bounded move ([`Solve::follow`]): the previous shadow maps and spheres around
     /// the moved objects before and after, so that only rays near them are cast again.
     reuse: Option<(crate::frame::shadow::ShadowMaps, Vec<(glam::DVec3, f64)>)>,
 }
@@ -64,15 +62,7 @@ impl CpuBackend {
     }
 }
 
-impl Backend for CpuBackend {
-    fn kind(&self) -> BackendKind {
-        BackendKind::Cpu
-    }
-
-    fn device(&self) -> String {
-        "cpu".into()
-    }
-
+impl Solve for CpuBackend {
     fn prepare_lights(&mut self, prep: &mut Prepared) -> Result<()> {
         let t = Instant::now();
         if !prep.maps.views.is_empty() {
@@ -95,14 +85,12 @@ impl Backend for CpuBackend {
         self.time("environment", t);
         Ok(())
     }
-
     fn initialize(&mut self, prep: &Prepared) -> Result<()> {
         let t = Instant::now();
         self.with_solver(prep, |s| s.initialize());
         self.time("solve", t);
         Ok(())
     }
-
     fn iterate_batch(
         &mut self,
         prep: &Prepared,
@@ -123,11 +111,9 @@ impl Backend for CpuBackend {
         self.time("solve", t);
         Ok(figures)
     }
-
     fn resumable(&self) -> bool {
         true
     }
-
     fn warm_start(&mut self, _: &Prepared, i_ex: &Table) -> Result<()> {
         let state = self.state.as_mut().expect("state present");
         state.i_ex = i_ex.clone();
@@ -135,14 +121,12 @@ impl Backend for CpuBackend {
         state.energies.clear();
         Ok(())
     }
-
     fn keep_solution(&mut self, _: &Prepared) -> Result<()> {
         let state = self.state.as_mut().expect("state present");
         state.residuals.clear();
         state.energies.clear();
         Ok(())
     }
-
     fn follow(&mut self, before: &Prepared, prep: &Prepared) -> Result<bool> {
         // The solver reads the system at every iteration: only the ray caster holds geometry.
         self.caster = RayCaster::new(&prep.system);
@@ -155,52 +139,28 @@ impl Backend for CpuBackend {
         });
         Ok(true)
     }
-
     fn i_ex(&mut self) -> Result<Table> {
         Ok(self.state().i_ex.clone())
     }
-
     fn i_total(&mut self) -> Result<Table> {
         Ok(self.state().i_total.clone())
     }
+}
 
-    fn overflow_limit(&self) -> f64 {
-        f64::MAX
-    }
-
-    fn widen(&mut self, _: &Prepared) -> Result<Option<String>> {
-        Ok(None)
-    }
-
+impl Draw for CpuBackend {
     fn draw(&mut self, prep: &Prepared) -> Result<Image> {
         let t = Instant::now();
         let image = prep.render_cpu(&self.state().i_total, &self.caster);
         self.time("frame", t);
         Ok(image)
     }
+}
 
-    fn set_camera(&mut self, _: &Prepared) -> Result<()> {
-        // The ray-cast frame reads `prep.camera` at every draw.
-        Ok(())
+impl Backend for CpuBackend {
+    fn kind(&self) -> BackendKind {
+        BackendKind::Cpu
     }
-
     fn take_timings(&mut self) -> Vec<(String, f64)> {
         std::mem::take(&mut self.timings)
-    }
-
-    fn precision(&self) -> Precision {
-        Precision::F64
-    }
-
-    fn fallbacks(&self) -> Vec<String> {
-        Vec::new()
-    }
-
-    fn memory(&self) -> MemoryReport {
-        MemoryReport::default()
-    }
-
-    fn as_gpu(&mut self) -> Option<&mut super::gpu::GpuBackend> {
-        None
     }
 }

@@ -2,9 +2,8 @@
 //! ([`GpuFrame`]) on one Vulkan context, submitted by themselves or recorded into a command
 //! buffer an embedding host gives them.
 
-use super::backend::Backend;
-use super::prepared::Prepared;
-use super::GpuTuning;
+use crate::backend::GpuTuning;
+use crate::backend::{Backend, Draw, Prepared, Solve};
 use crate::error::Result;
 use crate::frame::lights::direct_in_table;
 use crate::frame::Image;
@@ -34,6 +33,11 @@ pub(crate) fn frame_scene(prep: &Prepared) -> FrameScene<'_> {
     }
 }
 
+/// Points `frame` at `prep.camera` (same size) with `prep`'s lights, VPLs among them.
+pub(crate) fn take_camera(frame: &mut GpuFrame, prep: &Prepared) -> Result<()> {
+    frame.set_camera(&prep.scene, prep.lights.len(), &prep.camera, &prep.system)
+}
+
 /// The raster frame of `prep` on `ctx`, reading `solver`'s I_total.
 pub(crate) fn frame_for(
     ctx: &Arc<Context>,
@@ -52,20 +56,20 @@ pub struct GpuBackend {
     frame: GpuFrame,
     direct: Option<Table>,
     /// The environment's shadowed incident table of the last light preparation (kept for a
-    /// solver made anew at another precision, [`Backend::widen`]).
+    /// solver made anew at another precision, [`Solve::widen`]).
     sky: Option<Table>,
     tuning: GpuTuning,
     pending: Vec<(String, f64)>,
     /// After a follow that left every shadow view as it was: the maps' distances, reused
     /// instead of rendered and read back.
     kept_maps: Option<Vec<f32>>,
-    /// Where [`Backend::follow`] records the solver's uploads (an embedding host's command
-    /// buffer, [`super::Engine::record_update`]); `None`: submitted at once.
+    /// Where [`Solve::follow`] records the solver's uploads (an embedding host's command
+    /// buffer, [`crate::engine::Engine::record_update`]); `None`: submitted at once.
     record_into: Option<vk::CommandBuffer>,
     last_follow: FollowReport,
 }
 
-/// What the last [`Backend::follow`] of the GPU backend did.
+/// What the last [`Solve::follow`] of the GPU backend did.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct FollowReport {
     /// The solver kept its tables and solution and took the moved links in place.
@@ -200,15 +204,7 @@ impl GpuBackend {
     }
 }
 
-impl Backend for GpuBackend {
-    fn kind(&self) -> BackendKind {
-        BackendKind::Gpu
-    }
-
-    fn device(&self) -> String {
-        self.ctx.info.name.clone()
-    }
-
+impl Solve for GpuBackend {
     fn follow(&mut self, before: &Prepared, prep: &Prepared) -> Result<bool> {
         // The solver was planned for these passes and precision: it keeps its tables and
         // solution. Where objects moved along the bound it takes the new link records,
@@ -252,12 +248,10 @@ impl Backend for GpuBackend {
         self.last_follow = report;
         Ok(true)
     }
-
     fn keep_solution(&mut self, _: &Prepared) -> Result<()> {
         // The images hold the solution; a new source scale has rescaled it (set_direct).
         Ok(())
     }
-
     fn prepare_lights(&mut self, prep: &mut Prepared) -> Result<()> {
         self.direct = None;
         // The sky's rays once per light preparation (the geometry may have moved).
@@ -287,14 +281,12 @@ impl Backend for GpuBackend {
         }
         self.set_sources(prep)
     }
-
     fn initialize(&mut self, _: &Prepared) -> Result<()> {
         self.solver.initialize()?;
         let t = self.solver.timings().to_vec();
         self.collect(&t);
         Ok(())
     }
-
     fn iterate_batch(
         &mut self,
         _: &Prepared,
@@ -307,27 +299,21 @@ impl Backend for GpuBackend {
         self.collect(&t);
         Ok(figures)
     }
-
     fn resumable(&self) -> bool {
         true
     }
-
     fn warm_start(&mut self, prep: &Prepared, i_ex: &Table) -> Result<()> {
         self.solver.upload_i_ex(&prep.system, i_ex)
     }
-
     fn i_ex(&mut self) -> Result<Table> {
         self.solver.read_i_ex()
     }
-
     fn i_total(&mut self) -> Result<Table> {
         self.solver.read_i_total()
     }
-
     fn overflow_limit(&self) -> f64 {
         self.solver.overflow_limit()
     }
-
     fn widen(&mut self, prep: &Prepared) -> Result<Option<String>> {
         if self.solver.precision() == Precision::F32 {
             return Ok(None);
@@ -337,36 +323,37 @@ impl Backend for GpuBackend {
         self.frame.bind_solver(&self.solver);
         Ok(Some("tables switched to float32".into()))
     }
+    fn precision(&self) -> Precision {
+        self.solver.precision()
+    }
+}
 
+impl Draw for GpuBackend {
     fn draw(&mut self, _: &Prepared) -> Result<Image> {
         let image = self.frame.render(&mut self.solver)?;
         let t = self.frame.timings().to_vec();
         self.collect(&t);
         Ok(image)
     }
-
     fn set_camera(&mut self, prep: &Prepared) -> Result<()> {
-        self.frame
-            .set_camera(&prep.scene, prep.lights.len(), &prep.camera, &prep.system)
+        take_camera(&mut self.frame, prep)
     }
+}
 
+impl Backend for GpuBackend {
+    fn kind(&self) -> BackendKind {
+        BackendKind::Gpu
+    }
+    fn device(&self) -> String {
+        self.ctx.info.name.clone()
+    }
     fn take_timings(&mut self) -> Vec<(String, f64)> {
         std::mem::take(&mut self.pending)
     }
-
-    fn precision(&self) -> Precision {
-        self.solver.precision()
-    }
-
     fn fallbacks(&self) -> Vec<String> {
         self.solver.fallbacks().to_vec()
     }
-
     fn memory(&self) -> MemoryReport {
         self.solver.memory()
-    }
-
-    fn as_gpu(&mut self) -> Option<&mut GpuBackend> {
-        Some(self)
     }
 }
