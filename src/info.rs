@@ -44,6 +44,8 @@ pub struct Info {
     /// The same plan on a discrete GPU's limits ([`DeviceLimits::discrete`]): wider images
     /// hold more rows per column, narrower lines cut the global pass's footprints finer.
     pub discrete_gpu: Planned,
+    /// Descriptor ranges the link records are read through on lavapipe (128 MiB each).
+    pub link_ranges: u32,
     /// Passes a render of this scene runs, in order (the scene analysis, [`Plan::passes`]).
     pub passes: Vec<String>,
     /// What the analysis decided and why.
@@ -70,7 +72,7 @@ impl Info {
         let mut mem = lavapipe.memory_bytes;
         mem.insert("cpu_tables".into(), cpu);
         discrete_gpu.memory_bytes.insert("cpu_tables".into(), cpu);
-        let work = lavapipe.work;
+        let (work, link_ranges) = (lavapipe.work, lavapipe.link_chunks);
         Ok(Self {
             scene: scene
                 .path
@@ -89,6 +91,7 @@ impl Info {
             memory_bytes: mem,
             work,
             discrete_gpu,
+            link_ranges,
             passes: plan.passes(),
             decisions: plan.decisions.clone(),
             shading: plan.shading.clone(),
@@ -103,7 +106,7 @@ impl Info {
         let prep = Prepared::new(scene, options, None, progress)?;
         let mut info = Self::new(&prep)?;
         let records = info.work.global.primitives;
-        let chunks = prep.planned(&DeviceLimits::lavapipe())?.link_chunks;
+        let chunks = info.link_ranges;
         info.decisions.push(format!(
             "checked against a link budget of {} (--max-links) and {}; info opens no device and assumes lavapipe's limits: maxImageDimension2D 16384, line width 255, maxStorageBufferRange 128 MiB (the {records} link records read in {chunks} range{}); on the GPU backend the tables must also fit the device's memory, which `render` checks",
             options
