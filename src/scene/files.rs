@@ -88,6 +88,23 @@ pub fn check_regular_file(path: &Path) -> Result<u64, FileProblem> {
     Ok(meta.len())
 }
 
+/// Reads a regular file's bytes (glTF binaries and buffers), at most what its metadata says.
+pub fn read_bytes(path: &Path) -> Result<Vec<u8>, FileProblem> {
+    let len = check_regular_file(path)?;
+    let file = std::fs::File::open(path).map_err(|e| {
+        FileProblem::Path(if e.kind() == std::io::ErrorKind::PermissionDenied {
+            "cannot be read: permission denied".to_string()
+        } else {
+            format!("cannot be opened: {e}")
+        })
+    })?;
+    let mut bytes = Vec::with_capacity(len as usize);
+    file.take(len)
+        .read_to_end(&mut bytes)
+        .map_err(|e| FileProblem::Path(format!("cannot be read: {e}")))?;
+    Ok(bytes)
+}
+
 /// Reads a regular file as UTF-8 text. `what` names the format in messages ("OBJ", "MTL",
 /// "scene"). A file with NUL bytes is binary; a file that is not UTF-8 says where.
 pub fn read_text(path: &Path, what: &str) -> Result<String, FileProblem> {

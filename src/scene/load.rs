@@ -15,8 +15,12 @@ use std::path::Path;
 /// Why a source brighter than [`MAX_SOURCE`] is refused.
 pub const SOURCE_LIMIT_REASON: &str = "multiplied by areas, 1/r² and interreflection (up to 1e4×) it would overflow float32 tables and images";
 
-/// Reads and validates a scene file; mesh paths are relative to it.
+/// Reads and validates a scene file: the project's TOML (mesh paths relative to it), a glTF 2.0
+/// file (`.gltf`, `.glb`) or a Mitsuba 3 XML scene (`.xml`), by its extension.
 pub fn load_scene(path: &Path) -> Result<Scene> {
+    if super::object::is_gltf(path) {
+        return load_gltf_scene(path);
+    }
     let text = files::read_text(path, "scene").map_err(|p| match p {
         FileProblem::Path(m) => scene_err(path, format!("scene file {m}")),
         FileProblem::Content(m) => scene_err(path, m),
@@ -93,6 +97,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene> {
         ));
     }
     let mut warned = BTreeSet::new();
+    let mut gltf_camera = None;
     for (i, o) in file.object.iter().enumerate() {
         let (transform, transform_field) = transform(o, i, path)?;
         let src = ObjectSource {
@@ -103,7 +108,10 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene> {
             transform_field,
         };
         let first = scene.meshes.len();
-        load_object(&mut scene, o, &src, &mut warned)?;
+        let camera = load_object(&mut scene, o, &src, &mut warned)?;
+        if gltf_camera.is_none() {
+            gltf_camera = camera;
+        }
         let motion =
             animation::object_motion(o, i, transform.to_scale_rotation_translation(), path)?;
         scene.objects.push(animation::SceneObject {
@@ -113,6 +121,10 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene> {
             motion,
         });
     }
+    // A glTF mesh's first perspective camera stands in for a missing `[camera]`.
+    if let (None, Some(c)) = (&file.camera, gltf_camera) {
+        scene.camera = c;
+    }
     scene.duration = animation::duration(
         file.animation.as_ref().and_then(|a| a.duration),
         &scene,
@@ -121,6 +133,59 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene> {
     resolve_element_size(&mut scene, given_size, path)?;
     scene.warnings = warned.into_iter().collect();
     Ok(scene)
+}
+
+/// A whole glTF file as a scene: its meshes (one unmoving object), lights and first perspective
+/// camera (else one framing its bounds from +z), no environment, the default settings.
+pub fn load_gltf_scene(path: &Path) -> Result<Scene> {
+    let bytes = files::read_bytes(path).map_err(|p| scene_err(path, format!("glTF file {p}")))?;
+    let mut scene = Scene::empty();
+    scene.path = Some(path.to_path_buf());
+    let mut warned = BTreeSet::new();
+    let none = Default::default();
+    let place = super::gltf_scene::Placement {
+        scene_path: path,
+        field: "materials".into(),
+        transform: DMat4::IDENTITY,
+        overrides: &none,
+    };
+    let loaded = super::gltf_scene::load_gltf(&mut scene, path, &bytes, &place, &mut warned)?;
+    scene.objects.push(animation::SceneObject {
+        meshes: 0..scene.meshes.len(),
+        transform: DMat4::IDENTITY,
+        moving: false,
+        motion: None,
+    });
+    scene.camera = match loaded.camera {
+        Some(c) => c,
+        None => framing(&scene),
+    };
+    if scene.lights.is_empty() && !scene.materials.iter().any(|m| m.is_emitter()) {
+        warned.insert(format!(
+            "{}: no lights and no emissive materials: the image is black",
+            path.display()
+        ));
+    }
+    resolve_element_size(&mut scene, false, path)?;
+    scene.warnings = warned.into_iter().collect();
+    Ok(scene)
+}
+
+/// A camera on +z looking down −z at the scene's bounds, which fill its 40° field of view.
+pub(super) fn framing(scene: &Scene) -> Camera {
+    let (lo, hi) = scene.bounds();
+    let centre = (lo + hi) * 0.5;
+    let radius = ((hi - lo).length() * 0.5).max(1e-6);
+    let fov = 40.0f64;
+    let distance = radius / (fov.to_radians() * 0.5).sin();
+    Camera {
+        eye: centre + DVec3::Z * distance,
+        target: centre,
+        up: DVec3::Y,
+        fov_y_deg: fov,
+        width: 512,
+        height: 512,
+    }
 }
 
 /// An error in the scene file.

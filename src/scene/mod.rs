@@ -4,6 +4,7 @@
 pub mod animation;
 mod files;
 pub mod format;
+pub mod gltf_scene;
 pub mod limits;
 pub mod load;
 mod obj;

@@ -36,10 +36,23 @@ pub fn load_object(
     o: &ObjectDesc,
     src: &ObjectSource,
     warned: &mut BTreeSet<String>,
-) -> Result<()> {
+) -> Result<Option<super::Camera>> {
     let i = src.index;
     let obj_path: PathBuf = src.base.join(&o.mesh);
     let shown = obj_path.display();
+    if is_gltf(&obj_path) {
+        let bytes = files::read_bytes(&obj_path).map_err(|p| {
+            scene_err(src.scene_path, format!("`object[{i}].mesh`: {shown} {p}"))
+        })?;
+        let place = super::gltf_scene::Placement {
+            scene_path: src.scene_path,
+            field: format!("object[{i}].materials"),
+            transform: src.transform,
+            overrides: &o.materials,
+        };
+        let loaded = super::gltf_scene::load_gltf(scene, &obj_path, &bytes, &place, warned)?;
+        return Ok(loaded.camera);
+    }
     let text = files::read_text(&obj_path, "OBJ").map_err(|p| match p {
         FileProblem::Path(m) => {
             scene_err(src.scene_path, format!("`object[{i}].mesh`: {shown} {m}"))
@@ -272,7 +285,14 @@ pub fn load_object(
             describe(t),
         ));
     }
-    Ok(())
+    Ok(None)
+}
+
+/// Whether `path` names a glTF file (`.gltf`, `.glb`, any case).
+pub fn is_gltf(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"))
 }
 
 /// What a dropped triangle repeats: a face (by its line) or an earlier triangle (by index).
