@@ -10,7 +10,7 @@ use serde_json::{json, Value};
 use std::f64::consts::FRAC_1_SQRT_2;
 use std::path::{Path, PathBuf};
 
-const SAMPLES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/scenes/gltf-samples");
+const SAMPLES: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/gltf-samples");
 
 fn sample(rel: &str) -> PathBuf {
     Path::new(SAMPLES).join(rel)
