@@ -42,23 +42,31 @@ fn document(
     }
     let pbytes = positions.len() * 12;
     let nbytes = normals.len() * 12;
-    let (lo, hi) = positions.iter().fold(([f32::MAX; 3], [f32::MIN; 3]), |(l, h), p| {
-        (
-            [l[0].min(p[0]), l[1].min(p[1]), l[2].min(p[2])],
-            [h[0].max(p[0]), h[1].max(p[1]), h[2].max(p[2])],
-        )
-    });
+    let (lo, hi) = positions
+        .iter()
+        .fold(([f32::MAX; 3], [f32::MIN; 3]), |(l, h), p| {
+            (
+                [l[0].min(p[0]), l[1].min(p[1]), l[2].min(p[2])],
+                [h[0].max(p[0]), h[1].max(p[1]), h[2].max(p[2])],
+            )
+        });
     let mut views = vec![json!({"buffer": 0, "byteOffset": 0, "byteLength": pbytes})];
-    let mut accessors = vec![json!({"bufferView": 0, "componentType": 5126, "count": positions.len(), "type": "VEC3", "min": lo, "max": hi})];
+    let mut accessors = vec![
+        json!({"bufferView": 0, "componentType": 5126, "count": positions.len(), "type": "VEC3", "min": lo, "max": hi}),
+    ];
     let mut attributes = json!({"POSITION": 0});
     if !normals.is_empty() {
         views.push(json!({"buffer": 0, "byteOffset": pbytes, "byteLength": nbytes}));
-        accessors.push(json!({"bufferView": 1, "componentType": 5126, "count": normals.len(), "type": "VEC3"}));
+        accessors.push(
+            json!({"bufferView": 1, "componentType": 5126, "count": normals.len(), "type": "VEC3"}),
+        );
         attributes["NORMAL"] = json!(1);
     }
     let mut primitive = json!({"attributes": attributes, "mode": mode});
     if !indices.is_empty() {
-        views.push(json!({"buffer": 0, "byteOffset": pbytes + nbytes, "byteLength": indices.len() * 4}));
+        views.push(
+            json!({"buffer": 0, "byteOffset": pbytes + nbytes, "byteLength": indices.len() * 4}),
+        );
         accessors.push(json!({"bufferView": views.len() - 1, "componentType": 5125, "count": indices.len(), "type": "SCALAR"}));
         primitive["indices"] = json!(accessors.len() - 1);
     }
@@ -105,21 +113,37 @@ fn khronos_samples_load_with_their_counts() {
     let cases = [
         ("Box/glTF-Binary/Box.glb", 12, 0),
         ("BoxInterleaved/glTF-Binary/BoxInterleaved.glb", 12, 0),
-        ("NegativeScaleTest/glTF-Binary/NegativeScaleTest.glb", 7724, 0),
+        (
+            "NegativeScaleTest/glTF-Binary/NegativeScaleTest.glb",
+            7724,
+            0,
+        ),
         ("OrientationTest/glTF-Binary/OrientationTest.glb", 524, 0),
         ("SimpleSparseAccessor/glTF/SimpleSparseAccessor.gltf", 12, 0),
         ("SimpleMeshes/glTF/SimpleMeshes.gltf", 2, 0),
         ("Cameras/glTF/Cameras.gltf", 2, 0),
         ("LightsPunctualLamp/glTF/LightsPunctualLamp.gltf", 6000, 5),
-        ("EmissiveStrengthTest/glTF-Binary/EmissiveStrengthTest.glb", 90, 0),
+        (
+            "EmissiveStrengthTest/glTF-Binary/EmissiveStrengthTest.glb",
+            90,
+            0,
+        ),
         ("Triangle/glTF/Triangle.gltf", 1, 0),
-        ("TriangleWithoutIndices/glTF/TriangleWithoutIndices.gltf", 1, 0),
+        (
+            "TriangleWithoutIndices/glTF/TriangleWithoutIndices.gltf",
+            1,
+            0,
+        ),
     ];
     for (file, triangles, lights) in cases {
         let s = load_scene(&sample(file)).unwrap_or_else(|e| panic!("{file}: {e}"));
         assert_eq!(s.triangle_count(), triangles, "{file}");
         assert_eq!(s.lights.len(), lights, "{file}");
-        println!("{file}: {} meshes, warnings {:?}", s.meshes.len(), s.warnings);
+        println!(
+            "{file}: {} meshes, warnings {:?}",
+            s.meshes.len(),
+            s.warnings
+        );
     }
     // Bounds: the accessors' own min/max where the nodes have no transform; the box is ±0.5
     // about the origin after its root's −90° turn about x.
@@ -128,10 +152,19 @@ fn khronos_samples_load_with_their_counts() {
     assert_eq!((lo, hi), (DVec3::ZERO, DVec3::new(6.0, 4.0, 0.0)));
     let (lo, hi) = bounds("Triangle/glTF/Triangle.gltf");
     assert_eq!((lo, hi), (DVec3::ZERO, DVec3::new(1.0, 1.0, 0.0)));
-    for f in ["Box/glTF-Binary/Box.glb", "BoxInterleaved/glTF-Binary/BoxInterleaved.glb"] {
+    for f in [
+        "Box/glTF-Binary/Box.glb",
+        "BoxInterleaved/glTF-Binary/BoxInterleaved.glb",
+    ] {
         let (lo, hi) = bounds(f);
-        assert!((lo + DVec3::splat(0.5)).abs().max_element() < 1e-6, "{f} {lo}");
-        assert!((hi - DVec3::splat(0.5)).abs().max_element() < 1e-6, "{f} {hi}");
+        assert!(
+            (lo + DVec3::splat(0.5)).abs().max_element() < 1e-6,
+            "{f} {lo}"
+        );
+        assert!(
+            (hi - DVec3::splat(0.5)).abs().max_element() < 1e-6,
+            "{f} {hi}"
+        );
     }
     // Interleaved and separate accessors give the same box.
     let a = load_scene(&sample("Box/glTF-Binary/Box.glb")).unwrap();
@@ -145,15 +178,22 @@ fn khronos_samples_load_with_their_counts() {
         assert!((*q - *p - DVec3::X).length() < 1e-6);
     }
     // Cameras: the perspective camera (yfov 0.7, aspect 1) at (0.5, 0.5, 3) looking down −z.
-    let c = load_scene(&sample("Cameras/glTF/Cameras.gltf")).unwrap().camera;
+    let c = load_scene(&sample("Cameras/glTF/Cameras.gltf"))
+        .unwrap()
+        .camera;
     assert!((c.eye - DVec3::new(0.5, 0.5, 3.0)).length() < 1e-6);
     assert!(((c.target - c.eye).normalize() - DVec3::NEG_Z).length() < 1e-6);
     assert!((c.fov_y_deg - 0.7f64.to_degrees()).abs() < 1e-4);
     assert_eq!((c.width, c.height), (512, 512));
     // The square is turned −45° about x: its normal is (0, sin 45°, cos 45°)... from (0, 0, 1).
-    let m = &load_scene(&sample("Cameras/glTF/Cameras.gltf")).unwrap().meshes[0];
+    let m = &load_scene(&sample("Cameras/glTF/Cameras.gltf"))
+        .unwrap()
+        .meshes[0];
     let n = m.face_normal(0);
-    assert!((n - DVec3::new(0.0, 1.0, 1.0).normalize()).length() < 2e-3, "{n}");
+    assert!(
+        (n - DVec3::new(0.0, 1.0, 1.0).normalize()).length() < 2e-3,
+        "{n}"
+    );
     // Emissive strength: the five emitters are (0.1, 0.5, 0.9) × 1, 2, 4, 8, 16.
     let s = load_scene(&sample(
         "EmissiveStrengthTest/glTF-Binary/EmissiveStrengthTest.glb",
@@ -196,11 +236,19 @@ fn mirrored_nodes_keep_their_front() {
     // One triangle facing +z under x ↦ −x still faces +z.
     let d = dir("mirror");
     let normals = [[0.0, 0.0, 1.0f32]; 3];
-    let doc = document(&TRI, &normals, &[0, 1, 2], 4, json!({"nodes": [{"mesh": 0, "scale": [-1.0, 1.0, 1.0]}]}));
+    let doc = document(
+        &TRI,
+        &normals,
+        &[0, 1, 2],
+        4,
+        json!({"nodes": [{"mesh": 0, "scale": [-1.0, 1.0, 1.0]}]}),
+    );
     let s = load_scene(&write(&d, "mirror.gltf", &doc)).unwrap();
     assert!((s.meshes[0].face_normal(0) - DVec3::Z).length() < 1e-9);
     assert!((s.meshes[0].positions[1] + DVec3::X).length() < 1e-9);
-    assert!(s.meshes[0].normals[0].iter().all(|n| (*n - DVec3::Z).length() < 1e-9));
+    assert!(s.meshes[0].normals[0]
+        .iter()
+        .all(|n| (*n - DVec3::Z).length() < 1e-9));
 }
 
 #[test]
@@ -209,7 +257,9 @@ fn punctual_lights_convert_candela_and_lux_to_watts() {
     // lights[0]: color (1, 0.6318749785, 0.2390997559), 15 cd.
     let want = DVec3::new(1.0, 0.6318749785423279, 0.23909975588321689) * 15.0 / 683.0;
     assert!(
-        s.lights.iter().any(|l| matches!(l, Light::Point { intensity, .. } if (*intensity - want).length() < 1e-6)),
+        s.lights.iter().any(
+            |l| matches!(l, Light::Point { intensity, .. } if (*intensity - want).length() < 1e-6)
+        ),
         "{:?}",
         s.lights
     );
@@ -230,24 +280,41 @@ fn punctual_lights_convert_candela_and_lux_to_watts() {
             {"translation": [0.0, 5.0, 0.0], "rotation": [-FRAC_1_SQRT_2, 0.0, 0.0, FRAC_1_SQRT_2], "extensions": {"KHR_lights_punctual": {"light": 2}}}
         ]
     });
-    let s = load_scene(&write(&d, "lights.gltf", &document(&TRI, &[], &[0, 1, 2], 4, lights))).unwrap();
+    let s = load_scene(&write(
+        &d,
+        "lights.gltf",
+        &document(&TRI, &[], &[0, 1, 2], 4, lights),
+    ))
+    .unwrap();
     assert_eq!(s.lights.len(), 3);
     match &s.lights[0] {
-        Light::Directional { direction, irradiance } => {
+        Light::Directional {
+            direction,
+            irradiance,
+        } => {
             assert!((*direction - DVec3::NEG_Y).length() < 1e-6, "{direction}");
             assert!((*irradiance - DVec3::ONE).length() < 1e-9);
         }
         l => panic!("{l:?}"),
     }
     match &s.lights[1] {
-        Light::Point { position, intensity } => {
+        Light::Point {
+            position,
+            intensity,
+        } => {
             assert_eq!(*position, DVec3::new(1.0, 2.0, 3.0));
             assert!((*intensity - DVec3::new(4.0, 2.0, 0.0)).length() < 1e-6);
         }
         l => panic!("{l:?}"),
     }
     match &s.lights[2] {
-        Light::Spot { position, axis, intensity, cutoff, beam_width } => {
+        Light::Spot {
+            position,
+            axis,
+            intensity,
+            cutoff,
+            beam_width,
+        } => {
             assert_eq!(*position, DVec3::new(0.0, 5.0, 0.0));
             assert!((*axis - DVec3::NEG_Y).length() < 1e-6);
             assert!((*intensity - DVec3::splat(0.1)).length() < 1e-6);
@@ -328,7 +395,10 @@ fn cornell_box_as_gltf_renders_as_its_obj() {
     assert_eq!(gl.triangle_count(), obj.triangle_count());
     for a in &obj.materials {
         let b = gl.materials.iter().find(|b| b.name == a.name).unwrap();
-        assert!((a.ke - b.ke).length() < 1e-4 * a.ke.length().max(1.0), "{a:?} {b:?}");
+        assert!(
+            (a.ke - b.ke).length() < 1e-4 * a.ke.length().max(1.0),
+            "{a:?} {b:?}"
+        );
         assert_eq!((a.kd, a.ks), (b.kd, b.ks), "{}", a.name);
     }
     let render = |s: &Scene| {
@@ -362,7 +432,9 @@ fn write_text(d: &Path, name: &str, text: &str) -> PathBuf {
 fn malformed_files_are_one_clear_error() {
     let d = dir("bad");
     let err = |p: &Path| {
-        let e = load_scene(p).expect_err(&p.display().to_string()).to_string();
+        let e = load_scene(p)
+            .expect_err(&p.display().to_string())
+            .to_string();
         assert!(e.contains(&p.display().to_string()), "{e}");
         e
     };
@@ -386,17 +458,28 @@ fn malformed_files_are_one_clear_error() {
     let mut doc = document(&TRI, &[], &[0, 1, 2], 4, json!({}));
     doc["buffers"][0]["uri"] = json!("absent.bin");
     let e = err(&write(&d, "buffer.gltf", &doc));
-    assert!(e.contains("buffers[0]") && e.contains("absent.bin") && e.contains("not found"), "{e}");
+    assert!(
+        e.contains("buffers[0]") && e.contains("absent.bin") && e.contains("not found"),
+        "{e}"
+    );
     // A short buffer.
     let mut doc = document(&TRI, &[], &[0, 1, 2], 4, json!({}));
     doc["buffers"][0]["byteLength"] = json!(4000);
     let e = err(&write(&d, "short.gltf", &doc));
     assert!(e.contains("fewer than its byteLength"), "{e}");
     // An index out of range.
-    let e = err(&write(&d, "index.gltf", &document(&TRI, &[], &[0, 1, 7], 4, json!({}))));
+    let e = err(&write(
+        &d,
+        "index.gltf",
+        &document(&TRI, &[], &[0, 1, 7], 4, json!({})),
+    ));
     assert!(e.contains("index 7 is out of range"), "{e}");
     // Lines only.
-    let e = err(&write(&d, "lines.gltf", &document(&TRI, &[], &[0, 1, 1, 2], 1, json!({}))));
+    let e = err(&write(
+        &d,
+        "lines.gltf",
+        &document(&TRI, &[], &[0, 1, 1, 2], 1, json!({})),
+    ));
     assert!(e.contains("points or lines only"), "{e}");
     // A reference to an accessor that does not exist (the crate's validation).
     let mut doc = document(&TRI, &[], &[0, 1, 2], 4, json!({}));
@@ -428,5 +511,11 @@ fn malformed_files_are_one_clear_error() {
     doc["meshes"][0]["primitives"] = json!([p, line]);
     let s = load_scene(&write(&d, "mixed.gltf", &doc)).unwrap();
     assert_eq!(s.triangle_count(), 1);
-    assert!(s.warnings.iter().any(|w| w.contains("1 lines primitive skipped")), "{:?}", s.warnings);
+    assert!(
+        s.warnings
+            .iter()
+            .any(|w| w.contains("1 lines primitive skipped")),
+        "{:?}",
+        s.warnings
+    );
 }

@@ -21,6 +21,12 @@ pub fn load_scene(path: &Path) -> Result<Scene> {
     if super::object::is_gltf(path) {
         return load_gltf_scene(path);
     }
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("xml"))
+    {
+        return super::mitsuba::load_mitsuba_scene(path);
+    }
     let text = files::read_text(path, "scene").map_err(|p| match p {
         FileProblem::Path(m) => scene_err(path, format!("scene file {m}")),
         FileProblem::Content(m) => scene_err(path, m),
@@ -106,6 +112,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene> {
             base,
             transform,
             transform_field,
+            forced: None,
         };
         let first = scene.meshes.len();
         let camera = load_object(&mut scene, o, &src, &mut warned)?;

@@ -7,8 +7,10 @@ pub mod format;
 pub mod gltf_scene;
 pub mod limits;
 pub mod load;
+pub mod mitsuba;
 mod obj;
 mod object;
+mod ply;
 mod settings;
 
 use glam::DVec3;

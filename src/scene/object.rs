@@ -24,6 +24,20 @@ pub struct ObjectSource<'a> {
     pub transform: DMat4,
     /// The transform's fields as written (for messages about where it takes vertices).
     pub transform_field: String,
+    /// Set by a Mitsuba scene: one material for every face, the MTL unread.
+    pub forced: Option<Forced>,
+}
+
+/// How a Mitsuba `obj` shape reads its file: its BSDF for every face (Mitsuba reads no MTL),
+/// `face_normals` dropping the `vn`, `flip_normals` turning the front round.
+#[derive(Debug, Clone, Copy)]
+pub struct Forced {
+    /// Index into the scene's materials.
+    pub material: u32,
+    /// Ignore the file's `vn`.
+    pub face_normals: bool,
+    /// Reverse every face (and its normals).
+    pub flip: bool,
 }
 
 /// The name of the grey diffuse material of faces without one (`materials.default` overrides
@@ -41,9 +55,8 @@ pub fn load_object(
     let obj_path: PathBuf = src.base.join(&o.mesh);
     let shown = obj_path.display();
     if is_gltf(&obj_path) {
-        let bytes = files::read_bytes(&obj_path).map_err(|p| {
-            scene_err(src.scene_path, format!("`object[{i}].mesh`: {shown} {p}"))
-        })?;
+        let bytes = files::read_bytes(&obj_path)
+            .map_err(|p| scene_err(src.scene_path, format!("{}: {shown} {p}", mesh_field(src))))?;
         let place = super::gltf_scene::Placement {
             scene_path: src.scene_path,
             field: format!("object[{i}].materials"),
@@ -55,12 +68,13 @@ pub fn load_object(
     }
     let text = files::read_text(&obj_path, "OBJ").map_err(|p| match p {
         FileProblem::Path(m) => {
-            scene_err(src.scene_path, format!("`object[{i}].mesh`: {shown} {m}"))
+            scene_err(src.scene_path, format!("{}: {shown} {m}", mesh_field(src)))
         }
         FileProblem::Content(m) => mesh_err(&obj_path, m),
     })?;
     let scan = obj::scan_obj(&text, &obj_path)?;
-    let (models, mtl) = parse(&scan, &obj_path)?;
+    let forced = src.forced;
+    let (models, mtl) = parse(&scan, &obj_path, forced.is_none())?;
     // Faces without a material get the grey default, which `materials.default` may override.
     let no_material = models.iter().any(|m| m.mesh.material_id.is_none());
     let default_override = no_material && !mtl.iter().any(|m| m.name.trim() == DEFAULT_MATERIAL);
@@ -89,7 +103,8 @@ pub fn load_object(
             scan.polylines[0]
         ));
     }
-    if scan.faces_without_usemtl
+    if forced.is_none()
+        && scan.faces_without_usemtl
         && !(default_override && o.materials.contains_key(DEFAULT_MATERIAL))
     {
         warned.insert(format!(
@@ -97,7 +112,7 @@ pub fn load_object(
         ));
     }
     for (name, line) in &scan.usemtl {
-        if !mtl.iter().any(|m| m.name == *name) {
+        if forced.is_none() && !mtl.iter().any(|m| m.name == *name) {
             warned.insert(format!(
                 "{shown}: line {line}: usemtl {name}: no material of that name in its MTL library; its faces get the default grey diffuse material (Kd 0.5), as in other renderers"
             ));
@@ -133,6 +148,7 @@ pub fn load_object(
             })
             .collect();
         let mat = match mesh.material_id {
+            _ if forced.is_some() => forced.map_or(0, |f| f.material),
             Some(id) if id < mtl.len() => first + id as u32,
             Some(id) => {
                 return Err(mesh_err(
@@ -163,7 +179,10 @@ pub fn load_object(
         for idx in mesh.indices.chunks_exact(3) {
             let t = t_file;
             t_file += 1;
-            let tri = [idx[0], idx[1], idx[2]];
+            let tri = match forced {
+                Some(f) if f.flip => [idx[0], idx[2], idx[1]],
+                _ => [idx[0], idx[1], idx[2]],
+            };
             if tri.iter().any(|&v| v as usize >= positions.len()) {
                 return Err(mesh_err(
                     &obj_path,
@@ -197,12 +216,23 @@ pub fn load_object(
             seen.insert(key, t);
             triangles.push(tri);
             // The scan's normals are tobj's triangles only when the counts agree (`lines`).
-            let vn = lines.and(scan.triangle_normals.get(t).copied().flatten());
+            let vn = lines
+                .and(scan.triangle_normals.get(t).copied().flatten())
+                .filter(|_| !forced.is_some_and(|f| f.face_normals))
+                .map(|vn| match forced {
+                    Some(f) if f.flip => [vn[0], vn[2], vn[1]],
+                    _ => vn,
+                });
+            let turn = if forced.is_some_and(|f| f.flip) {
+                -1.0
+            } else {
+                1.0
+            };
             let face = (b - a).cross(c - a).normalize();
             normals.push(vn.and_then(|vn| {
                 let placed = vn.map(|i| {
                     let [x, y, z] = scan.normals[i as usize];
-                    normal_matrix * DVec3::new(x as f64, y as f64, z as f64)
+                    normal_matrix * DVec3::new(x as f64, y as f64, z as f64) * turn
                 });
                 let usable = |n: &DVec3| {
                     let len = n.length();
@@ -288,6 +318,14 @@ pub fn load_object(
     Ok(None)
 }
 
+/// How the mesh's path is named in messages: the TOML field, or the Mitsuba shape.
+fn mesh_field(src: &ObjectSource) -> String {
+    match src.forced {
+        Some(_) => src.transform_field.replace("to_world", "filename"),
+        None => format!("`object[{}].mesh`", src.index),
+    }
+}
+
 /// Whether `path` names a glTF file (`.gltf`, `.glb`, any case).
 pub fn is_gltf(path: &Path) -> bool {
     path.extension()
@@ -348,7 +386,11 @@ fn check_placed(
 
 /// Parses the scanned text with `tobj`, reading MTL libraries through [`obj::read_mtl`] and
 /// [`obj::parse_mtl`].
-fn parse(scan: &ObjScan, obj_path: &Path) -> Result<(Vec<tobj::Model>, Vec<tobj::Material>)> {
+fn parse(
+    scan: &ObjScan,
+    obj_path: &Path,
+    read_mtl: bool,
+) -> Result<(Vec<tobj::Model>, Vec<tobj::Material>)> {
     let opts = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
@@ -358,6 +400,9 @@ fn parse(scan: &ObjScan, obj_path: &Path) -> Result<(Vec<tobj::Model>, Vec<tobj:
     // tobj's loader callback can only return tobj's errors: keep ours aside.
     let mtl_error: RefCell<Option<Error>> = RefCell::new(None);
     let loaded = tobj::load_obj_buf(&mut scan.text.as_bytes(), &opts, |lib| {
+        if !read_mtl {
+            return Ok(Default::default());
+        }
         let line = scan
             .mtllibs
             .iter()
