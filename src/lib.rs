@@ -37,6 +37,7 @@ pub mod solids;
 pub mod solver;
 pub mod study;
 pub mod system;
+pub mod trace;
 
 pub use engine::{Engine, Options};
 pub use error::{Error, Result};

@@ -14,6 +14,7 @@ use crate::error::Result;
 use crate::progress::Silent;
 use crate::scene::{Precision, Scene, Scheme};
 use crate::settings::BackendKind;
+use crate::trace::{chrome_trace, Batch, Phase};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -80,6 +81,9 @@ pub const PAPER_TABLE2_MS_PER_ITERATION: [(&str, f64); 4] = [
 pub struct ProfileReport {
     /// Scene file.
     pub scene: String,
+    /// The timed batches, for `--trace` ([`ProfileReport::trace`]); not in the JSON report.
+    #[serde(skip)]
+    pub timeline: Vec<Batch>,
     /// Driver name (e.g. `llvmpipe`, `NVIDIA`).
     pub device: String,
     /// Device name.
@@ -154,6 +158,7 @@ pub struct Savings {
 
 struct Timed {
     per_pass: BTreeMap<String, Vec<f64>>,
+    batches: Vec<Batch>,
     totals: Vec<f64>,
     walls: Vec<f64>,
     memory: MemoryReport,
@@ -168,22 +173,37 @@ fn time_frames(
     warmup: usize,
     batch: usize,
     label: &str,
+    clock: Instant,
 ) -> Result<Timed> {
     engine.initialize()?;
     engine.iterate(warmup)?;
     engine.take_timings();
     let mut per_pass: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     let (mut totals, mut walls) = (Vec::new(), Vec::new());
+    let mut batches = Vec::new();
     let mut done = 0;
     while done < frames {
         let n = (frames - done).min(batch);
         let t = Instant::now();
+        let start_ms = t.duration_since(clock).as_secs_f64() * 1e3;
         engine.iterate(n)?;
         let wall = t.elapsed().as_secs_f64() * 1e3 / n as f64;
         let mut frame: BTreeMap<String, f64> = BTreeMap::new();
+        // One iteration's passes in recording order (the batch repeats them n times).
+        let mut order: Vec<(String, f64)> = Vec::new();
         for (name, ms) in engine.take_timings() {
-            *frame.entry(name).or_default() += ms / n as f64;
+            *frame.entry(name.clone()).or_default() += ms / n as f64;
+            match order.iter_mut().find(|(k, _)| *k == name) {
+                Some((_, v)) => *v += ms / n as f64,
+                None => order.push((name, ms / n as f64)),
+            }
         }
+        batches.push(Batch {
+            start_ms,
+            wall_ms: wall,
+            iterations: n,
+            passes: order,
+        });
         for _ in 0..n {
             totals.push(frame.values().sum());
             walls.push(wall);
@@ -197,6 +217,7 @@ fn time_frames(
     eprintln!();
     Ok(Timed {
         per_pass,
+        batches,
         totals,
         walls,
         memory: engine.memory(),
@@ -220,8 +241,9 @@ pub fn profile(
         ..options.clone()
     };
     let batch = crate::engine::BATCH;
+    let clock = Instant::now();
     let mut engine = Engine::new(scene, &options, &Silent)?;
-    let t = time_frames(&mut engine, frames, warmup, batch, "")?;
+    let t = time_frames(&mut engine, frames, warmup, batch, "", clock)?;
     let prep: &Prepared = engine.prepared();
     let median = |v: &[f64]| PassStats::of(v).median_ms;
     let savings = if options.all_passes {
@@ -230,7 +252,7 @@ pub fn profile(
         // Every pass on at the plan's precision: the figure is what leaving passes out saves
         // (float16 against float32 is a device property: lavapipe converts on the CPU).
         let mut all = Engine::from_prepared(prep.with_every_pass(), &options, &Silent)?;
-        let a = time_frames(&mut all, frames, warmup, batch, " (all passes)")?;
+        let a = time_frames(&mut all, frames, warmup, batch, " (all passes)", clock)?;
         Some(Savings {
             all_passes_median_ms: median(&a.totals),
             plan_median_ms: median(&t.totals),
@@ -307,10 +329,33 @@ pub fn profile(
         plan: prep.plan.passes(),
         decisions: prep.plan.decisions.clone(),
         savings,
+        timeline: t.batches,
     })
 }
 
 impl ProfileReport {
+    /// The run as a Chrome trace-event document ([`crate::trace`]): the setup phases and each
+    /// batch on the host track, every timed pass on the device track.
+    pub fn trace(&self) -> serde_json::Value {
+        let su = &self.setup;
+        let phases: Vec<Phase> = [
+            ("linking", su.linking_ms),
+            ("uploads", su.uploads_ms),
+            ("pipelines", su.pipelines_ms),
+            ("method setup", su.method_ms),
+            ("other setup", su.other_ms),
+            ("lights", su.lights_ms),
+        ]
+        .into_iter()
+        .filter(|(_, ms)| *ms > 0.0)
+        .map(|(name, ms)| Phase {
+            name: name.into(),
+            ms,
+        })
+        .collect();
+        chrome_trace(&self.device_name, &phases, &self.timeline)
+    }
+
     /// The Table 2-style text report.
     pub fn text(&self) -> String {
         let mb = |k: &str| self.memory_bytes.get(k).copied().unwrap_or(0) as f64 / (1 << 20) as f64;

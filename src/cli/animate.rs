@@ -14,7 +14,7 @@ use std::path::PathBuf;
 // The flags of `animate` (the variant's doc comment is its help).
 #[derive(Args)]
 pub struct AnimateArgs {
-    /// Scene TOML with keyframes.
+    /// Scene with keyframes (TOML; glTF and Mitsuba XML scenes have none).
     pub scene: PathBuf,
     /// Output directory (created if missing).
     #[arg(long)]

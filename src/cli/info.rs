@@ -10,7 +10,7 @@ use std::path::PathBuf;
 // The flags of `info` (the variant's doc comment is its help).
 #[derive(Args)]
 pub struct InfoArgs {
-    /// Scene TOML (default: the bundled Cornell box).
+    /// Scene: TOML, glTF (.gltf, .glb) or Mitsuba XML (.xml); default: the bundled Cornell box.
     pub scene: Option<PathBuf>,
     /// Print JSON instead of text.
     #[arg(long)]

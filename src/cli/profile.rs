@@ -10,7 +10,7 @@ use std::path::PathBuf;
 // The flags of `profile` (the variant's doc comment is its help).
 #[derive(Args)]
 pub struct ProfileArgs {
-    /// Scene TOML (default: the bundled Cornell box).
+    /// Scene: TOML, glTF (.gltf, .glb) or Mitsuba XML (.xml); default: the bundled Cornell box.
     pub scene: Option<PathBuf>,
     /// Frames to time after warm-up (at least 1).
     #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..=100_000))]
@@ -27,6 +27,10 @@ pub struct ProfileArgs {
     /// Write the report as JSON to this file.
     #[arg(long)]
     pub json: Option<PathBuf>,
+    /// Write the timed run as a Chrome trace-event file (JSON; open it in Perfetto or
+    /// chrome://tracing): a device track with every pass, a host track with setup and batches.
+    #[arg(long)]
+    pub trace: Option<PathBuf>,
     /// Vulkan device whose name contains this (default: prefer a discrete GPU).
     #[arg(long)]
     pub device: Option<String>,
@@ -37,7 +41,7 @@ pub struct ProfileArgs {
 impl ProfileArgs {
     /// Times the frames and prints the table (and writes JSON if asked).
     pub fn run(self) -> Result<()> {
-        check_outputs([self.json.as_ref()])?;
+        check_outputs([self.json.as_ref(), self.trace.as_ref()])?;
         let s = load(self.scene)?;
         let mut o = self.plan.options();
         o.solver.bins = self.bins;
@@ -50,6 +54,11 @@ impl ProfileArgs {
             antiradiance::profile::profile(&s, &o, self.frames as usize, self.warmup as usize)
                 .with_context(|| scene_name(&s))?;
         print!("{}", report.text());
+        if let Some(path) = &self.trace {
+            let text = serde_json::to_string(&report.trace())?;
+            std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))?;
+            eprintln!("wrote {}", path.display());
+        }
         write_json(&self.json, &report)
     }
 }

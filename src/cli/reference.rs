@@ -11,7 +11,7 @@ use std::path::PathBuf;
 // The flags of `reference` (the variant's doc comment is its help).
 #[derive(Args)]
 pub struct ReferenceArgs {
-    /// Scene TOML (default: the bundled Cornell box).
+    /// Scene: TOML, glTF (.gltf, .glb) or Mitsuba XML (.xml); default: the bundled Cornell box.
     pub scene: Option<PathBuf>,
     /// Samples per pixel.
     #[arg(long, default_value_t = 256)]

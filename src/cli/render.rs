@@ -15,7 +15,7 @@ use std::path::PathBuf;
 // The flags of `render` (the variant's doc comment is its help).
 #[derive(Args)]
 pub struct RenderArgs {
-    /// Scene TOML (default: the bundled Cornell box).
+    /// Scene: TOML, glTF (.gltf, .glb) or Mitsuba XML (.xml); default: the bundled Cornell box.
     pub scene: Option<PathBuf>,
     /// PNG output (tone-mapped sRGB; a name ending in .exr writes linear EXR instead);
     /// written when given, or when no --exr is given.

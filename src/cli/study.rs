@@ -11,7 +11,7 @@ use std::path::PathBuf;
 // The flags of `study` (the variant's doc comment is its help).
 #[derive(Args)]
 pub struct StudyArgs {
-    /// Scene TOML (default: the bundled Cornell box).
+    /// Scene: TOML, glTF (.gltf, .glb) or Mitsuba XML (.xml); default: the bundled Cornell box.
     pub scene: Option<PathBuf>,
     /// Reference EXR from `antiradiance reference` (its REF.direct.exr, when present, gives
     /// the indirect-only error), at the size the study renders: the scene camera's, or

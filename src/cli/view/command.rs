@@ -9,7 +9,7 @@ use std::path::PathBuf;
 // The flags of `view` (the variant's doc comment is its help).
 #[derive(Args)]
 pub struct ViewArgs {
-    /// Scene TOML (default: the bundled Cornell box).
+    /// Scene: TOML, glTF (.gltf, .glb) or Mitsuba XML (.xml); default: the bundled Cornell box.
     pub scene: Option<PathBuf>,
     #[command(flatten)]
     pub solver: SolverArgs,
