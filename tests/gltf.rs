@@ -525,15 +525,30 @@ fn a_gltf_camera_stands_in_for_a_missing_toml_camera() {
     let d = dir("camera");
     let cams = std::fs::read(sample("Cameras/glTF/Cameras.gltf")).unwrap();
     std::fs::write(d.join("c.gltf"), cams).unwrap();
-    std::fs::copy(sample("Cameras/glTF/simpleSquare.bin"), d.join("simpleSquare.bin")).unwrap();
-    let without = write_text(&d, "a.toml", "[[object]]\nmesh = \"c.gltf\"\ntranslate = [1.0, 0.0, 0.0]\n");
+    std::fs::copy(
+        sample("Cameras/glTF/simpleSquare.bin"),
+        d.join("simpleSquare.bin"),
+    )
+    .unwrap();
+    let without = write_text(
+        &d,
+        "a.toml",
+        "[[object]]\nmesh = \"c.gltf\"\ntranslate = [1.0, 0.0, 0.0]\n",
+    );
     let c = load_scene(&without).unwrap().camera;
     // The object's translation moves the glTF's camera with it.
-    assert!((c.eye - DVec3::new(1.5, 0.5, 3.0)).length() < 1e-6, "{}", c.eye);
+    assert!(
+        (c.eye - DVec3::new(1.5, 0.5, 3.0)).length() < 1e-6,
+        "{}",
+        c.eye
+    );
     let with = write_text(
         &d,
         "b.toml",
         "[camera]\neye = [0.0, 0.0, 9.0]\ntarget = [0.0, 0.0, 0.0]\n[[object]]\nmesh = \"c.gltf\"\n",
     );
-    assert_eq!(load_scene(&with).unwrap().camera.eye, DVec3::new(0.0, 0.0, 9.0));
+    assert_eq!(
+        load_scene(&with).unwrap().camera.eye,
+        DVec3::new(0.0, 0.0, 9.0)
+    );
 }

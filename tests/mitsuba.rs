@@ -298,3 +298,54 @@ fn bad_files_are_one_clear_error() {
     assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
     assert!(stderr.contains("line 1"), "{stderr}");
 }
+
+#[test]
+fn measured_spectra_convert_as_mitsuba_converts_them() {
+    // The Cornell box's measured reflectances and light, against what Mitsuba 3.9.1's parser
+    // (scalar_rgb, `mi.traverse` of the loaded scene) makes of the same XML.
+    let text = std::fs::read_to_string(repo("tests/data/cornell-spectra.txt")).unwrap();
+    let spectra: Vec<(&str, &str)> = text
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .filter_map(|l| l.split_once(' '))
+        .collect();
+    let mut xml = String::from("<scene version=\"3.0.0\">");
+    for (i, (name, value)) in spectra.iter().enumerate() {
+        let inner = if *name == "luminaire" {
+            format!(
+                "<emitter type=\"area\"><spectrum name=\"radiance\" value=\"{value}\"/></emitter>"
+            )
+        } else {
+            format!(
+                "<bsdf type=\"diffuse\"><spectrum name=\"reflectance\" value=\"{value}\"/></bsdf>"
+            )
+        };
+        xml += &format!(
+            "<shape type=\"rectangle\" id=\"{name}\"><transform name=\"to_world\"><translate x=\"{}\"/></transform>{inner}</shape>",
+            3 * i
+        );
+    }
+    xml += "</scene>";
+    let s = load_scene(&write(&tmp("spectra"), "s.xml", &xml)).unwrap();
+    let of = |name: &str| {
+        let m = s.meshes.iter().find(|m| m.name == name).unwrap();
+        s.materials[m.material[0] as usize].clone()
+    };
+    for (name, want, tol) in [
+        ("white", DVec3::new(0.735013, 0.735625, 0.736264), 0.008),
+        ("red", DVec3::new(0.49132, 0.0492281, 0.0509219), 0.008),
+        ("green", DVec3::new(0.0682825, 0.39776, 0.0862909), 0.008),
+    ] {
+        let kd = of(name).kd;
+        println!("{name}: {kd} (want {want})");
+        assert!(
+            (kd - want).abs().max_element() < tol,
+            "{name}: {kd} vs {want}"
+        );
+    }
+    let ke = of("luminaire").ke;
+    let want = DVec3::new(20.7108, 10.8546, 2.77115);
+    println!("light: {ke} (want {want})");
+    // 0.0027 (reflectance) and 0.36% (radiance) measured: the observer is a fit.
+    assert!(((ke - want) / want).abs().max_element() < 0.01, "{ke}");
+}

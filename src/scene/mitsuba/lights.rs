@@ -15,7 +15,10 @@ pub const SKY_RADIANCE: f64 = 1.0;
 impl<'a, 'i> Reader<'a, 'i> {
     pub(super) fn emitter(&mut self, scene: &mut Scene, n: Node<'a, 'i>) -> Result<()> {
         let kind = self.attr(n, "type")?;
-        let p = self.props(n)?;
+        self.within_emitter = true;
+        let p = self.props(n);
+        self.within_emitter = false;
+        let p = p?;
         let to_world = match p.get("toworld") {
             Some(Value::Transform(m)) => *m,
             _ => DMat4::IDENTITY,

@@ -10,6 +10,7 @@
 mod lights;
 mod materials;
 mod shapes;
+mod spectrum;
 
 use super::load::{framing, scene_err};
 use super::settings::resolve_element_size;
@@ -48,6 +49,7 @@ pub fn load_mitsuba_scene(path: &Path) -> Result<Scene> {
         skipped: BTreeMap::new(),
         notes: BTreeSet::new(),
         materials: HashMap::new(),
+        within_emitter: false,
     };
     let mut scene = Scene::empty();
     scene.path = Some(path.to_path_buf());
@@ -131,6 +133,8 @@ pub(super) struct Reader<'a, 'i> {
     warned: BTreeSet<String>,
     skipped: BTreeMap<String, usize>,
     notes: BTreeSet<String>,
+    /// Reading an emitter's properties (a spectrum is converted without D65, unbounded).
+    within_emitter: bool,
     /// Scene material per (BSDF id or inline position, emitted radiance bits).
     materials: HashMap<(String, [u64; 3]), u32>,
 }
@@ -234,16 +238,24 @@ impl<'a, 'i> Reader<'a, 'i> {
         let s = self.attr(c, "value")?;
         let tag = c.tag_name().name();
         if tag == "spectrum" && s.contains(':') {
-            // Wavelength:value pairs: their mean, grey.
-            let vals: Option<Vec<f64>> = s
+            // Wavelength:value pairs, converted as Mitsuba 3's RGB modes convert them.
+            let pairs: Option<Vec<(f64, f64)>> = s
                 .split(',')
-                .map(|p| p.split(':').nth(1).and_then(|v| v.trim().parse().ok()))
+                .map(|p| {
+                    let (l, v) = p.split_once(':')?;
+                    let (l, v) = (l.trim().parse::<f64>().ok()?, v.trim().parse::<f64>().ok()?);
+                    (l.is_finite() && v.is_finite()).then_some((l, v))
+                })
                 .collect();
-            let vals = vals.ok_or_else(|| self.err(c, format!("unreadable spectrum `{s}`")))?;
-            self.note("sampled spectra (their mean, grey)");
-            return Ok(DVec3::splat(
-                vals.iter().sum::<f64>() / vals.len().max(1) as f64,
-            ));
+            let pairs = pairs
+                .filter(|p| p.len() >= 2 && p.windows(2).all(|w| w[0].0 < w[1].0))
+                .ok_or_else(|| {
+                    self.err(
+                        c,
+                        format!("`{s}`: a spectrum is increasing wavelength:value pairs"),
+                    )
+                })?;
+            return Ok(spectrum::to_srgb(&pairs, self.within_emitter));
         }
         let v = numbers(&s).ok_or_else(|| self.err(c, format!("`{s}` is not a colour")))?;
         let rgb = match v.as_slice() {

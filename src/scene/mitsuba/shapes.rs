@@ -42,7 +42,10 @@ impl<'a, 'i> Reader<'a, 'i> {
                 self.skip(&format!("emitter {t} inside a shape"));
                 continue;
             }
-            let ep = self.props(e)?;
+            self.within_emitter = true;
+            let ep = self.props(e);
+            self.within_emitter = false;
+            let ep = ep?;
             ke = match ep.get("radiance") {
                 Some(Value::Color(c)) => *c,
                 _ => DVec3::ONE,
