@@ -156,3 +156,76 @@ fn tiny_study_writes_csv_and_plots() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The dynamic study (issue 34 item 4) on the moving Cornell box at 16×16: it writes the CSV
+/// and both plots, its second run takes every per-frame reference from the cache, and every
+/// error it reports is `compare`'s on the image and reference it names.
+#[test]
+fn dynamic_study_writes_its_rows_reuses_its_references_and_measures_as_compare() {
+    use antiradiance::study::dynamic::{run, write, DynamicOptions};
+    let scene = antiradiance::scene::load_scene(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box-moving.toml"),
+    )
+    .unwrap();
+    let out = std::env::temp_dir().join(format!("antiradiance-dynamic-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let mut o = DynamicOptions::defaults(out.clone(), 3, 4.0);
+    o.reference_spp = 16;
+    o.iterations_per_frame = vec![1, 2];
+    o.spp = vec![1];
+    o.accumulate_spp = 2;
+    o.vpls = 8;
+    o.save_images = true;
+    o.render.backend = antiradiance::BackendKind::Cpu;
+    o.render.width = Some(16);
+    o.render.height = Some(16);
+    o.render.solver.bins = Some(32);
+    let first = run(&scene, &o, &antiradiance::progress::Silent).unwrap();
+    assert_eq!(first.cached_references, 0);
+    // 3 frames × (antiradiance at 1 and 2 iterations, instant radiosity, the path tracer from
+    // scratch, accumulating).
+    assert_eq!(first.rows.len(), 3 * 5);
+    write(&first.rows, &out).unwrap();
+    for f in ["frames.csv", "error-vs-time.png", "error-over-frames.png"] {
+        assert!(std::fs::metadata(out.join(f)).unwrap().len() > 0, "{f}");
+    }
+    let csv = std::fs::read_to_string(out.join("frames.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    for col in ["method", "setting", "frame", "time", "frame_ms", "rel_rmse"] {
+        assert!(header.contains(&col), "{col}");
+    }
+    assert_eq!(csv.lines().count(), 1 + first.rows.len());
+    for r in &first.rows {
+        let img =
+            antiradiance::frame::Image::read_exr(&out.join(r.image.as_ref().unwrap())).unwrap();
+        let reference = antiradiance::frame::Image::read_exr(&out.join(&r.reference)).unwrap();
+        let m = antiradiance::metrics::compare(&img, &reference).unwrap();
+        // The saved EXR is float32, as the image the study measured.
+        assert!(
+            (m.rel_rmse - r.metrics.rel_rmse).abs() <= 1e-9 * r.metrics.rel_rmse.max(1.0),
+            "{} {} frame {}: {} vs {}",
+            r.method,
+            r.setting,
+            r.frame,
+            m.rel_rmse,
+            r.metrics.rel_rmse
+        );
+        assert!(r.metrics.rel_rmse.is_finite() && r.frame_ms > 0.0);
+    }
+    // The frames differ (the block moves), so their references do.
+    let refs: std::collections::BTreeSet<_> =
+        first.rows.iter().map(|r| r.reference.clone()).collect();
+    assert_eq!(refs.len(), 3);
+    let second = run(&scene, &o, &antiradiance::progress::Silent).unwrap();
+    assert_eq!(second.cached_references, 3);
+    // Deterministic methods measure the same against the cached references.
+    for (a, b) in first.rows.iter().zip(&second.rows) {
+        if a.method == "pathtracer" || a.method == "pathtracer-accumulating" {
+            assert_eq!(
+                a.metrics.rel_rmse, b.metrics.rel_rmse,
+                "{} {}",
+                a.method, a.frame
+            );
+        }
+    }
+}

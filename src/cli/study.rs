@@ -15,9 +15,35 @@ pub struct StudyArgs {
     pub scene: Option<PathBuf>,
     /// Reference EXR from `antiradiance reference` (its REF.direct.exr, when present, gives
     /// the indirect-only error), at the size the study renders: the scene camera's, or
-    /// --width/--height.
+    /// --width/--height. Not with --animate, which makes its own per frame.
+    #[arg(long, required_unless_present = "animate", conflicts_with = "animate")]
+    pub reference: Option<PathBuf>,
+    /// The dynamic study: over --frames frames at --fps, every frame against its own
+    /// path-traced reference (cached in OUT/cache), for antiradiance warm-started at 1, 2 and 4
+    /// iterations per frame, instant radiosity relit per frame, the path tracer from scratch
+    /// (1, 4, 16 spp) and accumulating (4 spp a frame, reset when the scene moved); writes
+    /// frames.csv, error-vs-time.png and error-over-frames.png.
     #[arg(long)]
-    pub reference: PathBuf,
+    pub animate: bool,
+    /// --animate: frames (default: the animation's duration × fps).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+    pub frames: Option<u32>,
+    /// --animate: frames per second of scene time (default 24).
+    #[arg(long, value_parser = positive)]
+    pub fps: Option<f64>,
+    /// --animate: samples per pixel of each frame's reference.
+    #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..))]
+    pub reference_spp: u32,
+    /// --animate: antiradiance's iterations per frame to try, comma-separated (default 1,2,4).
+    #[arg(long, value_delimiter = ',')]
+    pub iterations_per_frame: Option<Vec<usize>>,
+    /// --animate: spp the accumulating path tracer adds per frame (0: not run).
+    #[arg(long, default_value_t = 4)]
+    pub accumulate_spp: u32,
+    /// --animate: also write every frame's image to OUT/images (for `compare` against the
+    /// references in OUT/cache).
+    #[arg(long)]
+    pub save_images: bool,
     /// Output directory.
     #[arg(long)]
     pub out: PathBuf,
@@ -69,11 +95,58 @@ pub struct StudyArgs {
 }
 
 impl StudyArgs {
+    /// `study --animate`: the per-frame study of a moving scene.
+    fn run_dynamic(self) -> Result<()> {
+        let s = load(self.scene)?;
+        let sampling =
+            antiradiance::animate::Sampling::of(&s, self.frames.map(|f| f as usize), self.fps)?;
+        let out = self.out;
+        let mut o = antiradiance::study::dynamic::DynamicOptions::defaults(
+            out.clone(),
+            sampling.frames,
+            sampling.fps,
+        );
+        o.reference_spp = self.reference_spp;
+        o.iterations_per_frame = self.iterations_per_frame.unwrap_or(o.iterations_per_frame);
+        if let Some(spp) = self.spp {
+            o.spp = spp;
+        }
+        if let Some(v) = self.vpls.and_then(|v| v.first().copied()) {
+            o.vpls = v;
+        }
+        o.accumulate_spp = self.accumulate_spp;
+        o.save_images = self.save_images;
+        o.render.backend = self.backend;
+        o.render.device = self.device;
+        o.render.width = self.size.width;
+        o.render.height = self.size.height;
+        std::fs::create_dir_all(&out).with_context(|| format!("{}", out.display()))?;
+        check_outputs([Some(&out.join("frames.csv"))])?;
+        let run = antiradiance::study::dynamic::run(&s, &o, &Bars::default())?;
+        antiradiance::study::dynamic::write(&run.rows, &out)?;
+        for (m, setting, ms, e) in antiradiance::study::dynamic::means(&run.rows) {
+            eprintln!("{m}, {setting}: {ms:.1} ms per frame, relative RMSE {e:.4}");
+        }
+        eprintln!(
+            "{} of {} references from the cache; wrote {}/frames.csv, error-vs-time.png, error-over-frames.png",
+            run.cached_references,
+            sampling.frames,
+            out.display()
+        );
+        Ok(())
+    }
+
     /// Runs the sweep against the reference and writes study.csv and the plots.
     pub fn run(self) -> Result<()> {
+        if self.animate {
+            return self.run_dynamic();
+        }
         let s = load(self.scene)?;
         let out = self.out;
-        let truth = antiradiance::study::Truth::load(&self.reference)?;
+        let reference = self
+            .reference
+            .context("--reference is required without --animate")?;
+        let truth = antiradiance::study::Truth::load(&reference)?;
         let mut o = antiradiance::study::StudyOptions::defaults(&s, out.clone());
         o.iterations = self.iterations as usize;
         o.bins = self.bins.unwrap_or(o.bins);
@@ -94,7 +167,7 @@ impl StudyArgs {
         if (tw, th) != (w, h) {
             anyhow::bail!(
                 "{}: the reference is {tw}×{th} but the study renders at {w}×{h} (the scene camera's size, or --width/--height); render the reference with `reference --width {w} --height {h}`, or give the study --width {tw} --height {th}",
-                self.reference.display()
+                reference.display()
             );
         }
         std::fs::create_dir_all(&out).with_context(|| format!("{}", out.display()))?;

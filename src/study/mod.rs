@@ -8,6 +8,7 @@
 //! solve) and the error against a reference, for the full image and for indirect light alone,
 //! and writes `study.csv`, `error-vs-time.png` and `convergence.png`.
 
+pub mod dynamic;
 pub mod plot;
 
 use crate::engine::{Engine, Options};

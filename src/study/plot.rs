@@ -14,7 +14,7 @@ use std::sync::Once;
 /// DejaVu Sans (Bitstream Vera license, `DejaVuSans.LICENSE.txt` beside this file).
 static FONT: &[u8] = include_bytes!("DejaVuSans.ttf");
 
-fn register_font() {
+pub(super) fn register_font() {
     static ONCE: Once = Once::new();
     ONCE.call_once(|| {
         // Fails only for a malformed font; the bundled one is not.
