@@ -151,9 +151,14 @@ impl System {
             });
         }
         let rows = 2 * elements.len() as u64 - 1;
-        budget(rows, bins.count)?;
+        // The node × bin tables are antiradiance's (and hierarchical radiosity's); the methods
+        // without links (instant radiosity, progressive refinement) allocate none, so a dense
+        // mesh's triangles as their elements are not refused for them.
+        if link {
+            budget(rows, bins.count)?;
+        }
         let needed = cpu_table_bytes(rows, bins.count as u64);
-        if needed > CPU_TABLE_LIMIT_BYTES {
+        if link && needed > CPU_TABLE_LIMIT_BYTES {
             return Err(Error::TooLarge {
                 what: format!("CPU tables for {rows} nodes × {} bins", bins.count),
                 needed_bytes: needed,

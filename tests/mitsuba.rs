@@ -182,7 +182,8 @@ fn the_subset_reads_as_documented() {
         <shape type="sphere"><point name="center" x="3" y="0" z="0"/><float name="radius" value="0.5"/></shape>
         <shape type="ply"><string name="filename" value="quad.ply"/><bsdf type="plastic"/>
             <emitter type="area"><rgb name="radiance" value="4, 5, 6"/></emitter></shape>
-        <shape type="disk"/>
+        <shape type="disk"><transform name="to_world"><translate z="-2"/></transform></shape>
+        <shape type="serialized"/>
         <emitter type="point"><point name="position" x="0" y="3" z="0"/><rgb name="intensity" value="10"/></emitter>
         <emitter type="spot"><transform name="to_world"><lookat origin="0, 4, 0" target="0, 0, 0" up="0, 0, 1"/></transform>
             <float name="cutoff_angle" value="30"/><rgb name="intensity" value="2"/></emitter>
@@ -230,6 +231,14 @@ fn the_subset_reads_as_documented() {
     let m = &s.materials[quad.material[0] as usize];
     assert_eq!(m.ke, DVec3::new(4.0, 5.0, 6.0));
     assert!((m.kd - DVec3::splat(0.45)).length() < 1e-12 && m.ks == DVec3::splat(0.04));
+    // The disk: a fan of 64 facing +z, radius 1 about (0, 0, -2).
+    let disk = &s.meshes[4];
+    assert_eq!(disk.triangles.len(), 64);
+    assert!((0..64).all(|t| (disk.face_normal(t) - DVec3::Z).length() < 1e-9));
+    assert!(disk
+        .positions
+        .iter()
+        .all(|p| p.z == -2.0 && p.truncate().length() <= 1.0 + 1e-12));
     // Emitters.
     assert_eq!(s.lights.len(), 3);
     assert!(
@@ -259,7 +268,7 @@ fn the_subset_reads_as_documented() {
     // What was skipped is said, once.
     let w = s.warnings.join("\n");
     assert!(
-        w.contains("shape disk") && w.contains("emitter envmap"),
+        w.contains("shape serialized") && w.contains("emitter envmap"),
         "{w}"
     );
     assert!(w.contains("twosided"), "{w}");

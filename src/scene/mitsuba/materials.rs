@@ -50,7 +50,10 @@ impl<'a, 'i> Reader<'a, 'i> {
                     None => Ok(m),
                 };
             }
-            "diffuse" => {
+            "diffuse" | "roughdiffuse" => {
+                if kind == "roughdiffuse" {
+                    self.note("roughdiffuse (as diffuse)");
+                }
                 m.kd = rgb("reflectance", 0.5).unwrap_or_else(|_| {
                     self.notes.insert(
                         "textures (a diffuse texture is grey 0.5, a plastic's base 0.8)".into(),

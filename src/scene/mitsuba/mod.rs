@@ -226,6 +226,18 @@ impl<'a, 'i> Reader<'a, 'i> {
                 "rgb" | "srgb" | "spectrum" => Value::Color(self.color(c)?),
                 "point" | "vector" => Value::Vector(self.point(c)?),
                 "transform" => Value::Transform(self.transform(c)?),
+                // A checkerboard is its colours' mean (as the Veach conversion took it); any
+                // other texture stands for whatever the BSDF puts in its place.
+                "texture" if c.attribute("type") == Some("checkerboard") => {
+                    let p = self.props(c)?;
+                    let col = |k: &str, d: f64| match p.get(k) {
+                        Some(Value::Color(x)) => *x,
+                        Some(Value::Number(x)) => DVec3::splat(*x),
+                        _ => DVec3::splat(d),
+                    };
+                    self.note("checkerboard textures (the mean of their two colours)");
+                    Value::Color((col("color0", 0.4) + col("color1", 0.2)) * 0.5)
+                }
                 "texture" => Value::Texture,
                 _ => continue,
             };

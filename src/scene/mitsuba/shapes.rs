@@ -160,6 +160,22 @@ impl<'a, 'i> Reader<'a, 'i> {
                     true,
                 )?;
             }
+            "disk" => {
+                let (v, t) = disk(64);
+                self.note("disks (tessellated: 64 segments)");
+                self.push(
+                    scene,
+                    n,
+                    &id,
+                    v,
+                    Vec::new(),
+                    t,
+                    to_world,
+                    material,
+                    flip,
+                    true,
+                )?;
+            }
             "cube" => {
                 let (v, t) = cube();
                 self.push(
@@ -289,6 +305,17 @@ impl<'a, 'i> Reader<'a, 'i> {
     }
 }
 
+/// Mitsuba's `disk`: the unit disk in z = 0 facing +z, as a fan of `seg` triangles.
+fn disk(seg: u32) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+    let mut v = vec![[0.0, 0.0, 0.0]];
+    for k in 0..seg {
+        let a = 2.0 * std::f64::consts::PI * k as f64 / seg as f64;
+        v.push([a.cos(), a.sin(), 0.0]);
+    }
+    let t = (0..seg).map(|k| [0, 1 + k, 1 + (k + 1) % seg]).collect();
+    (v, t)
+}
+
 /// Mitsuba's `cube`: [−1, 1]³, faces outward.
 fn cube() -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
     let mut v = Vec::new();
@@ -353,6 +380,16 @@ mod tests {
             let n = (b - a).cross(c - a);
             n.length() < 1e-12 || n.dot((a + b + c) / 3.0) > 0.0
         })
+    }
+
+    #[test]
+    fn the_disk_faces_up() {
+        let (v, t) = disk(16);
+        assert_eq!(t.len(), 16);
+        for tri in &t {
+            let [a, b, c] = tri.map(|i| DVec3::from_array(v[i as usize]));
+            assert!((b - a).cross(c - a).z > 0.0);
+        }
     }
 
     #[test]
