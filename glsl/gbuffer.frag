@@ -12,6 +12,11 @@ layout(location = 1) out vec4 out_vertex;  // rgb vertex radiance, w the display
 layout(location = 2) out vec4 out_normal;  // interpolated shading normal (not normalized)
 
 void main() {
+    // Back-to-back twins (the two faces of a two-sided surface) lie at one depth: the face
+    // turned toward the eye wins the tie (reversed depth, GREATER: a back face is pushed a few
+    // ulps farther), as the CPU ray caster prefers it (raycast.rs closest).
+    bool front = dot(pc.eye.xyz - world, elements[leaf].face_normal.xyz) > 0.0;
+    gl_FragDepth = front ? gl_FragCoord.z : gl_FragCoord.z * (1.0 - 4.0e-7);
     out_position = vec4(world, emits != 0u ? -float(leaf + 1u) : float(leaf + 1u));
     // A splatted sample's bin toward the eye, found once here instead of by each of the ~4
     // splats that cover it: the splatted leaves lie in its plane (surfaces.rs display_bin).

@@ -168,13 +168,23 @@ impl RayCaster {
         let mut best: Option<Hit> = None;
         // Shapes come in order of their boxes' entry distance: once a box starts beyond the
         // best hit, none of the rest can be nearer.
+        // Back-to-back twins (a two-sided surface's two faces) meet the ray at one t: the face
+        // turned toward the ray's origin wins the tie, as in the G-buffer (gbuffer.frag).
+        let faces = |c: &[DVec3; 3]| (c[1] - c[0]).cross(c[2] - c[0]).dot(d) < 0.0;
+        let mut best_faces = false;
         for s in self.bvh.nearest_traverse_iterator(&ray, &self.shapes) {
             let limit = best.map_or(t_max, |b| b.t);
-            if entry(&s.bounds, o, d) > limit {
+            let tie = limit * (1.0 + 1e-6) + 1e-12;
+            if entry(&s.bounds, o, d) > tie {
                 break;
             }
             if let Some((t, u, v)) = intersect(&s.corners, o, d, t_min) {
-                if t < limit {
+                let f = faces(&s.corners);
+                let wins = t < limit && !(best_faces && !f && t > limit * (1.0 - 1e-6));
+                let ties_better =
+                    best.is_some() && f && !best_faces && t <= tie && t >= limit * (1.0 - 1e-6);
+                if wins || ties_better {
+                    best_faces = f;
                     let shape = self.index(s) as u32;
                     best = Some(Hit {
                         leaf: self.owner.get(shape as usize).copied().unwrap_or(shape),

@@ -18,6 +18,8 @@ fn soup(s: &Scene) -> Vec<[f64; 14]> {
     let v: Vec<[f64; 14]> = s
         .meshes
         .iter()
+        // The back-to-back twins of two-sided shapes are compared by count (same_surfaces).
+        .filter(|m| !m.name.ends_with(antiradiance::scene::BACK_SUFFIX))
         .flat_map(|m| {
             m.triangles.iter().zip(&m.material).map(move |(t, &k)| {
                 let [a, b, c] = t.map(|i| m.positions[i as usize]);
@@ -63,9 +65,18 @@ fn same_surfaces(xml: &Scene, toml: &Scene, what: &str) {
             worst = worst.max(d);
         }
     }
+    let twins = |s: &Scene| {
+        s.meshes
+            .iter()
+            .filter(|m| m.name.ends_with(antiradiance::scene::BACK_SUFFIX))
+            .map(|m| m.triangles.len())
+            .sum::<usize>()
+    };
     println!(
-        "{what}: {} triangles, worst difference {worst:.2e}",
-        a.len()
+        "{what}: {} triangles ({} and {} back-to-back twins), worst difference {worst:.2e}",
+        a.len(),
+        twins(xml),
+        twins(toml)
     );
     // 3.0e-7 (Veach) and 5.0e-7 (breakfast room) measured.
     assert!(worst < 1.5e-6, "{what}: worst {worst}");
@@ -102,30 +113,45 @@ fn veach_bidir_xml_is_its_toml() {
     same_camera(&xml, &toml);
     assert!(xml.lights.is_empty() && xml.environment == DVec3::ZERO);
     assert!(xml.warnings.iter().any(|w| w.contains("dielectrics")));
-    // The same image at the TOML's settings, small.
-    let render = |s: &Scene| {
-        let mut s = s.clone();
-        s.solver = toml.solver.clone();
-        s.solver.bins = 32;
-        s.solver.iterations = 2;
-        s.camera.width = 40;
-        s.camera.height = 24;
-        s.camera.fov_y_deg = toml.camera.fov_y_deg;
-        let o = Options {
+    // Its BSDFs are twosided and its walls' fronts face outward: each twosided shape has its
+    // back-to-back twin (the glass is not twosided; the TOML's one object is two-sided whole,
+    // the egg's inside included).
+    let twins: usize = xml
+        .meshes
+        .iter()
+        .filter(|m| m.name.ends_with(antiradiance::scene::BACK_SUFFIX))
+        .map(|m| m.triangles.len())
+        .sum();
+    assert!(twins > 0 && twins < xml.triangle_count() / 2);
+    // Against Mitsuba 3's own render of this file at 128×72 (fov 35° on x): the mean. One-sided,
+    // the room was black from inside (0.8% of Mitsuba's mean); measured with the twins 1.15.
+    let reference =
+        antiradiance::frame::Image::read_exr(&repo("tests/data/veach-mitsuba/mitsuba.exr"))
+            .unwrap();
+    let mut s = xml.clone();
+    s.camera.width = reference.width;
+    s.camera.height = reference.height;
+    let t = (17.5f64.to_radians()).tan() * reference.height as f64 / reference.width as f64;
+    s.camera.fov_y_deg = 2.0 * t.atan().to_degrees();
+    let r = antiradiance::engine::render(
+        &s,
+        &Options {
             backend: BackendKind::Cpu,
-            shadow_map_size: 128,
             ..Default::default()
-        };
-        antiradiance::engine::render(&s, &o, &antiradiance::progress::Silent).unwrap()
+        },
+        &antiradiance::progress::Silent,
+    )
+    .unwrap();
+    let mean = |im: &antiradiance::frame::Image| {
+        im.pixels
+            .iter()
+            .map(|p| (p[0] + p[1] + p[2]) as f64)
+            .sum::<f64>()
+            / im.pixels.len() as f64
     };
-    let (a, b) = (render(&xml), render(&toml));
-    let m = antiradiance::metrics::compare(&a.image, &b.image).unwrap();
-    println!(
-        "veach-bidir XML vs TOML image: relative RMSE {:.2e}",
-        m.rel_rmse
-    );
-    // 3.8e-5 measured: the positions differ by the conversion's rounding (%.7g).
-    assert!(m.rel_rmse < 1.2e-4, "{}", m.rel_rmse);
+    let ratio = mean(&r.image) / mean(&reference);
+    println!("veach-bidir XML against Mitsuba 3: mean ratio {ratio:.3}");
+    assert!((ratio - 1.0).abs() < 0.35, "{ratio}");
 }
 
 #[test]
@@ -216,7 +242,10 @@ fn the_subset_reads_as_documented() {
     let m = &s.materials[cube.material[0] as usize];
     assert_eq!((m.kd, m.ks, m.ns), (DVec3::ZERO, DVec3::ONE, 6.0));
     // The sphere: radius 0.5 about (3, 0, 0), Mitsuba's default grey diffuse.
-    let sphere = &s.meshes[2];
+    // The cube's BSDF is twosided: its twin follows it.
+    assert_eq!(s.meshes[2].triangles.len(), 12);
+    assert!(s.meshes[2].name.ends_with(antiradiance::scene::BACK_SUFFIX));
+    let sphere = &s.meshes[3];
     assert!(sphere
         .positions
         .iter()
@@ -226,13 +255,13 @@ fn the_subset_reads_as_documented() {
         DVec3::splat(0.5)
     );
     // The PLY quad emits (4, 5, 6); smooth plastic: kd 0.9 × 0.5, ks 0.04, the sharpest lobe.
-    let quad = &s.meshes[3];
+    let quad = &s.meshes[4];
     assert_eq!(quad.triangles.len(), 2);
     let m = &s.materials[quad.material[0] as usize];
     assert_eq!(m.ke, DVec3::new(4.0, 5.0, 6.0));
     assert!((m.kd - DVec3::splat(0.45)).length() < 1e-12 && m.ks == DVec3::splat(0.04));
     // The disk: a fan of 64 facing +z, radius 1 about (0, 0, -2).
-    let disk = &s.meshes[4];
+    let disk = &s.meshes[5];
     assert_eq!(disk.triangles.len(), 64);
     assert!((0..64).all(|t| (disk.face_normal(t) - DVec3::Z).length() < 1e-9));
     assert!(disk

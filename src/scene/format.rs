@@ -193,6 +193,9 @@ pub struct ObjectDesc {
     /// Moved by the host between frames (`Engine::set_object_transform`) without keyframes
     /// (keyframes imply it; `false` with keyframes is refused).
     pub moving: Option<bool>,
+    /// Every face also gets its back-to-back twin, so both sides reflect (a Mitsuba
+    /// `twosided` BSDF; [`super::add_twins`]). Emission stays on the front.
+    pub two_sided: Option<bool>,
 }
 
 /// Rotation by `angle_deg` degrees about `axis` (right-handed).

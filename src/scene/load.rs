@@ -116,6 +116,10 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene> {
         };
         let first = scene.meshes.len();
         let camera = load_object(&mut scene, o, &src, &mut warned)?;
+        if o.two_sided == Some(true) {
+            let end = scene.meshes.len();
+            super::add_twins(&mut scene, first..end);
+        }
         if gltf_camera.is_none() {
             gltf_camera = camera;
         }

@@ -258,6 +258,51 @@ impl Default for SolverSettings {
     }
 }
 
+/// Appended to the name of a two-sided mesh's back-facing twin ([`add_twins`]).
+pub const BACK_SUFFIX: &str = " (back)";
+
+/// Gives every mesh in `meshes` its back-to-back twin (reversed winding and normals), so that
+/// both sides of the surface reflect: surfaces here have one front. The twin reflects as its
+/// original does but emits nothing (Mitsuba's area emitters emit from the front only).
+pub fn add_twins(scene: &mut Scene, meshes: std::ops::Range<usize>) {
+    let mut dark: std::collections::HashMap<u32, u32> = std::collections::HashMap::new();
+    for k in meshes {
+        let m = &scene.meshes[k];
+        let (triangles, normals) = (
+            m.triangles.iter().map(|t| [t[0], t[2], t[1]]).collect(),
+            m.normals.iter().map(|n| [-n[0], -n[2], -n[1]]).collect(),
+        );
+        let (name, source, positions) = (
+            format!("{}{BACK_SUFFIX}", m.name),
+            m.source.clone(),
+            m.positions.clone(),
+        );
+        let original = m.material.clone();
+        let material = original
+            .iter()
+            .map(|&id| {
+                if !scene.materials[id as usize].is_emitter() {
+                    return id;
+                }
+                *dark.entry(id).or_insert_with(|| {
+                    let mut d = scene.materials[id as usize].clone();
+                    d.ke = DVec3::ZERO;
+                    scene.materials.push(d);
+                    (scene.materials.len() - 1) as u32
+                })
+            })
+            .collect();
+        scene.meshes.push(Mesh {
+            name,
+            source,
+            positions,
+            triangles,
+            material,
+            normals,
+        });
+    }
+}
+
 /// A validated scene.
 #[derive(Debug, Clone)]
 pub struct Scene {

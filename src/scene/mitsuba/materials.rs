@@ -38,7 +38,7 @@ impl<'a, 'i> Reader<'a, 'i> {
         match kind.as_str() {
             "twosided" | "mask" | "bumpmap" | "normalmap" => {
                 if kind == "twosided" {
-                    self.note("twosided (surfaces are one-sided: the front of each face)");
+                    self.note("twosided (each face gets a back-to-back twin that reflects and does not emit)");
                 } else {
                     self.note(&format!("{kind} (its inner BSDF is used)"));
                 }

@@ -21,6 +21,7 @@ use roxmltree::Node;
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::Path;
 
+pub use crate::scene::BACK_SUFFIX;
 pub use lights::{SKY_RADIANCE, SUN_IRRADIANCE};
 pub use materials::GLASS_EXPONENT;
 

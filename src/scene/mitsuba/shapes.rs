@@ -96,6 +96,7 @@ impl<'a, 'i> Reader<'a, 'i> {
                     materials: BTreeMap::new(),
                     keyframe: Vec::new(),
                     moving: None,
+                    two_sided: None,
                 };
                 let src = ObjectSource {
                     index: scene.objects.len(),
@@ -212,6 +213,14 @@ impl<'a, 'i> Reader<'a, 'i> {
                 return Ok(());
             }
         }
+        // A `twosided` BSDF reflects on both sides; surfaces here have one front, so each face
+        // gets its back-to-back twin (reversed winding, the same BSDF, no emission: Mitsuba's
+        // area emitters emit from the front only). Without, a room whose walls' fronts face
+        // outward renders black from inside (Veach's room did: 0.8% of Mitsuba 3's mean).
+        if bsdf_node.is_some_and(|b| self.is_twosided(b)) {
+            let end = scene.meshes.len();
+            crate::scene::add_twins(scene, first..end);
+        }
         scene.objects.push(SceneObject {
             meshes: first..scene.meshes.len(),
             transform: to_world,
@@ -219,6 +228,21 @@ impl<'a, 'i> Reader<'a, 'i> {
             motion: None,
         });
         Ok(())
+    }
+
+    /// Whether a `<bsdf>` (or the one a `<ref>` names) is `twosided`.
+    fn is_twosided(&self, b: Node) -> bool {
+        let node = if b.has_tag_name("ref") {
+            match b.attribute("id").and_then(|id| self.named.get(id)) {
+                Some(n) => *n,
+                None => return false,
+            }
+        } else {
+            b
+        };
+        node.attribute("type")
+            .and_then(|t| self.substitute(node, t).ok())
+            .is_some_and(|t| t == "twosided")
     }
 
     /// A generated or PLY mesh placed by `m`. `keep_front`: Mitsuba's own shapes keep their
