@@ -27,6 +27,13 @@ fn keep_freed_memory() {
 
 fn main() -> std::process::ExitCode {
     keep_freed_memory();
+    // Output piped into `head` and the like ends quietly, as other command-line tools do,
+    // instead of a panic in println! on the closed pipe.
+    #[cfg(unix)]
+    // SAFETY: restores the default disposition of one signal before any other thread exists.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) if !e.use_stderr() => e.exit(), // --help, --version

@@ -60,11 +60,6 @@ impl State<'_> {
                 if m.alpha_mode() != gltf::material::AlphaMode::Opaque {
                     self.notes.insert("alpha (treated as opaque)");
                 }
-                if m.double_sided() {
-                    self.notes.insert(
-                        "doubleSided (surfaces are one-sided: the counter-clockwise front)",
-                    );
-                }
                 map_material(
                     &name,
                     pbr.base_color_factor(),
@@ -280,6 +275,11 @@ impl State<'_> {
                 material: vec![material; count],
                 normals,
             });
+            // A doubleSided material is lit from both sides: its back-to-back twin.
+            if prim.material().double_sided() {
+                let k = scene.meshes.len();
+                crate::scene::add_twins(scene, k - 1..k);
+            }
         }
         Ok(())
     }
