@@ -141,71 +141,45 @@ impl<'a, 'i> Reader<'a, 'i> {
                     false,
                 )?;
             }
-            "rectangle" => {
-                let v = vec![
-                    [-1.0, -1.0, 0.0],
-                    [1.0, -1.0, 0.0],
-                    [1.0, 1.0, 0.0],
-                    [-1.0, 1.0, 0.0],
-                ];
-                self.push(
-                    scene,
-                    n,
-                    &id,
-                    v,
-                    Vec::new(),
-                    vec![[0, 1, 2], [0, 2, 3]],
-                    to_world,
-                    material,
-                    flip,
-                    true,
-                )?;
-            }
-            "disk" => {
-                let (v, t) = disk(64);
-                self.note("disks (tessellated: 64 segments)");
-                self.push(
-                    scene,
-                    n,
-                    &id,
-                    v,
-                    Vec::new(),
-                    t,
-                    to_world,
-                    material,
-                    flip,
-                    true,
-                )?;
-            }
-            "cube" => {
-                let (v, t) = cube();
-                self.push(
-                    scene,
-                    n,
-                    &id,
-                    v,
-                    Vec::new(),
-                    t,
-                    to_world,
-                    material,
-                    flip,
-                    true,
-                )?;
-            }
-            "sphere" => {
-                let centre = match p.get("center") {
-                    Some(Value::Vector(c)) => *c,
-                    _ => DVec3::ZERO,
+            "rectangle" | "disk" | "cube" | "sphere" => {
+                // Mitsuba's own shapes, in their local frames; a sphere is placed by its centre
+                // and radius before to_world.
+                let (v, normals, t, m) = match kind.as_str() {
+                    "rectangle" => {
+                        let v = vec![
+                            [-1.0, -1.0, 0.0],
+                            [1.0, -1.0, 0.0],
+                            [1.0, 1.0, 0.0],
+                            [-1.0, 1.0, 0.0],
+                        ];
+                        (v, Vec::new(), vec![[0, 1, 2], [0, 2, 3]], to_world)
+                    }
+                    "disk" => {
+                        self.note("disks (tessellated: 64 segments)");
+                        let (v, t) = disk(64);
+                        (v, Vec::new(), t, to_world)
+                    }
+                    "cube" => {
+                        let (v, t) = cube();
+                        (v, Vec::new(), t, to_world)
+                    }
+                    _ => {
+                        let centre = match p.get("center") {
+                            Some(Value::Vector(c)) => *c,
+                            _ => DVec3::ZERO,
+                        };
+                        let radius = match p.get("radius") {
+                            Some(Value::Number(r)) => *r,
+                            _ => 1.0,
+                        };
+                        self.note("spheres (tessellated: 48 × 24 quads)");
+                        let (v, normals, t) = sphere(48, 24);
+                        let m = to_world
+                            * DMat4::from_translation(centre)
+                            * DMat4::from_scale(DVec3::splat(radius));
+                        (v, normals, t, m)
+                    }
                 };
-                let radius = match p.get("radius") {
-                    Some(Value::Number(r)) => *r,
-                    _ => 1.0,
-                };
-                let m = to_world
-                    * DMat4::from_translation(centre)
-                    * DMat4::from_scale(DVec3::splat(radius));
-                let (v, normals, t) = sphere(48, 24);
-                self.note("spheres (tessellated: 48 × 24 quads)");
                 self.push(scene, n, &id, v, normals, t, m, material, flip, true)?;
             }
             other => {
