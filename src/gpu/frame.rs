@@ -13,7 +13,7 @@ use super::layout::{
 use super::memory::{Buffer, BufferDesc, Image, ImageDesc, MemoryReport, Purpose};
 use super::pack::{self, mat};
 use super::passes::targets::{FrameBuffers, FrameImages, RGBA32F};
-use super::passes::{self, FramePass};
+use super::passes::{self, FramePass, Source};
 use super::pipelines::{self, descriptor_kinds, Layouts};
 use super::profiler::Profiler;
 use super::solver::GpuSolver;
@@ -31,16 +31,16 @@ use std::sync::Arc;
 
 mod follow;
 
-/// Pipelines of the frame passes.
-pub struct FramePipelines {
+/// The frame passes, each owning its pipeline.
+struct FramePasses {
     /// Shadow-map views: linear distance, depth-tested.
-    pub shadow: Owned<vk::Pipeline>,
+    shadow: passes::shadow::Shadow,
     /// G-buffer: position + leaf, vertex-interpolated indirect light.
-    pub gbuffer: Owned<vk::Pipeline>,
+    gbuffer: passes::gbuffer::GBuffer,
     /// Splat fans, additive.
-    pub splat: Owned<vk::Pipeline>,
+    splat: passes::splat::Splat,
     /// Full-screen compose and 2×2 resolve.
-    pub compose: Owned<vk::Pipeline>,
+    compose: passes::compose::Compose,
 }
 
 /// The frame's buffer records, packed on the CPU ([`super::pack`]).
@@ -149,7 +149,7 @@ pub struct GpuFrame {
     ctx: Arc<Context>,
     images: FrameImages<Image>,
     buffers: FrameBuffers<Buffer>,
-    pipes: FramePipelines,
+    passes: FramePasses,
     set: vk::DescriptorSet,
     profiler: Profiler,
     constants: FrameConstants,
@@ -251,11 +251,16 @@ impl GpuFrame {
             std::mem::size_of::<FrameConstants>() as u32,
         )?;
         let specialization = spec::values(features, 0, false);
-        let pipes = FramePipelines {
-            shadow: passes::shadow::pipeline(c, &layouts.pipeline, &specialization)?,
-            gbuffer: passes::gbuffer::pipeline(c, &layouts.pipeline, &specialization, features)?,
-            splat: passes::splat::pipeline(c, &layouts.pipeline, &specialization)?,
-            compose: passes::compose::pipeline(c, &layouts.pipeline, &specialization)?,
+        let frame_passes = FramePasses {
+            shadow: passes::shadow::Shadow::new(c, &layouts.pipeline, &specialization)?,
+            gbuffer: passes::gbuffer::GBuffer::new(
+                c,
+                &layouts.pipeline,
+                &specialization,
+                features,
+            )?,
+            splat: passes::splat::Splat::new(c, &layouts.pipeline, &specialization)?,
+            compose: passes::compose::Compose::new(c, &layouts.pipeline, &specialization)?,
         };
         let setup = super::solver::SetupTimes {
             uploads_ms,
@@ -284,7 +289,7 @@ impl GpuFrame {
             ctx: ctx.clone(),
             images,
             buffers,
-            pipes,
+            passes: frame_passes,
             set,
             timings: Vec::new(),
             setup,
@@ -375,20 +380,16 @@ impl GpuFrame {
             cmd,
             layout: self.layouts.pipeline.raw(),
             set: self.set,
+            constants: self.constants,
         };
         let only = self.only.take().filter(|_| self.rendered);
-        let (pipes, images, prof) = (&self.pipes, &mut self.images, &mut self.profiler);
+        let corners = Source {
+            buffer: self.buffers.corners.raw,
+            count: self.corner_count,
+        };
+        let (shadow, images, prof) = (&self.passes.shadow, &mut self.images, &mut self.profiler);
         prof.scope(&ctx, cmd, "shadow", || {
-            passes::shadow::record(
-                &p,
-                &pipes.shadow,
-                images,
-                self.buffers.corners.raw,
-                self.corner_count,
-                &self.shadow_rects,
-                only.as_deref(),
-                self.constants,
-            )
+            shadow.record(&p, images, corners, &self.shadow_rects, only.as_deref())
         });
         self.rendered = true;
     }
@@ -421,42 +422,29 @@ impl GpuFrame {
         constants.sizes[3] = layout.rows_per_column;
         solver.prepare_display(cmd);
         let ctx = self.ctx.clone();
-        let features = self.features;
-        let splat = self.features.splat;
-        let corners = self.buffers.corners.raw;
+        let corners = Source {
+            buffer: self.buffers.corners.raw,
+            count: self.corner_count,
+        };
+        let splats = Source {
+            buffer: self.buffers.splats.raw,
+            count: self.splat_count,
+        };
         let p = FramePass {
             ctx: &ctx,
             cmd,
             layout: self.layouts.pipeline.raw(),
             set: self.set,
+            constants,
         };
-        let (pipes, images, prof) = (&self.pipes, &mut self.images, &mut self.profiler);
+        let (ps, images, prof) = (&self.passes, &mut self.images, &mut self.profiler);
         prof.scope(&ctx, cmd, "gbuffer", || {
-            passes::gbuffer::record(
-                &p,
-                &pipes.gbuffer,
-                images,
-                corners,
-                self.corner_count,
-                constants,
-                &features,
-            )
+            ps.gbuffer.record(&p, images, corners)
         });
-        if splat {
-            prof.scope(&ctx, cmd, "splat", || {
-                passes::splat::record(
-                    &p,
-                    &pipes.splat,
-                    images,
-                    self.buffers.splats.raw,
-                    self.splat_count,
-                    constants,
-                )
-            });
+        if self.features.splat {
+            prof.scope(&ctx, cmd, "splat", || ps.splat.record(&p, images, splats));
         }
-        prof.scope(&ctx, cmd, "compose", || {
-            passes::compose::record(&p, &pipes.compose, images, constants)
-        });
+        prof.scope(&ctx, cmd, "compose", || ps.compose.record(&p, images));
     }
 
     /// Starts a command buffer's frame timestamps (a host's; [`GpuFrame::render`] does it

@@ -5,7 +5,7 @@ use super::context::Context;
 use super::diagnostics::BlendRounding;
 use super::layout::{mode, PassConstants, FLAG_HALF};
 use super::memory::MemoryReport;
-use super::passes::{self, Pass, PipelineSpec, SolverPipelines};
+use super::passes::{self, Pass, PipelineSpec, SolverPasses};
 use super::pipelines::Layouts;
 use super::profiler::Profiler;
 use super::reduce::{Reducer, Start};
@@ -81,7 +81,7 @@ pub struct GpuSolver {
     ctx: Arc<Context>,
     res: Resources,
     layouts: Layouts,
-    pipes: SolverPipelines,
+    passes: SolverPasses,
     profiler: Profiler,
     parity: usize,
     constants: PassConstants,
@@ -203,10 +203,10 @@ impl GpuSolver {
             features,
             table: res.plan.layout,
         };
-        let mut pipes = SolverPipelines::new(&spec)?;
+        let mut passes = SolverPasses::new(&spec)?;
         // Every local variant now, so no pipeline is built during the iterations.
         for m in [mode::BOTH, mode::REFLECT, mode::ANTIRADIANCE] {
-            pipes.ensure_local(&spec, &res, m)?;
+            passes.local.ensure(&spec, &res, m)?;
         }
         let profiler = Profiler::new(&ctx, 1024)?;
         let reducer = Reducer::new(&ctx, &res)?;
@@ -229,7 +229,7 @@ impl GpuSolver {
             ctx,
             res,
             layouts,
-            pipes,
+            passes,
             profiler,
             parity: 0,
             constants,
@@ -363,7 +363,7 @@ impl GpuSolver {
             table: self.res.plan.layout,
         };
         for &m in modes {
-            self.pipes.ensure_local(&spec, &self.res, m)?;
+            self.passes.local.ensure(&spec, &self.res, m)?;
         }
         Ok(())
     }
@@ -404,7 +404,7 @@ impl GpuSolver {
             ctx,
             res,
             layouts,
-            pipes,
+            passes: ps,
             profiler: prof,
             parity,
             constants,
@@ -415,13 +415,12 @@ impl GpuSolver {
             ctx,
             cmd,
             layout: layouts.pipeline.raw(),
-            pipes,
             set: res.sets[cur],
             constants: *constants,
         };
         if propagate.is_some() {
-            prof.scope(ctx, cmd, "global", || passes::global::record(&p, res, cur));
-            prof.scope(ctx, cmd, "push", || passes::push::record(&p, res));
+            prof.scope(ctx, cmd, "global", || ps.global.record(&p, res, cur));
+            prof.scope(ctx, cmd, "push", || ps.push.record(&p, res));
         } else {
             prof.scope(ctx, cmd, "initialize", || {
                 let im = &mut res.images;
@@ -439,8 +438,8 @@ impl GpuSolver {
                 }
             });
         }
-        prof.scope(ctx, cmd, "local", || passes::local::record(&p, res, cur, m));
-        prof.scope(ctx, cmd, "pull", || passes::pull::record(&p, res, 1 - cur));
+        prof.scope(ctx, cmd, "local", || ps.local.record(&p, res, cur, m));
+        prof.scope(ctx, cmd, "pull", || ps.pull.record(&p, res, 1 - cur));
         *parity = 1 - cur;
     }
 

@@ -8,14 +8,44 @@ use crate::error::Result;
 use crate::gpu::barrier::{transition, Access};
 use crate::gpu::context::Context;
 use crate::gpu::handle::Owned;
-use crate::gpu::layout::FrameConstants;
 use crate::gpu::memory::Image;
 use crate::gpu::pipelines::{create, Target};
 use ash::vk;
 use std::sync::Arc;
 
-/// The pipeline: a full-screen triangle without vertex input.
-pub fn pipeline(
+/// The compose pass: its pipeline, a full-screen triangle without vertex input.
+pub struct Compose {
+    pipeline: Owned<vk::Pipeline>,
+}
+
+impl Compose {
+    /// Creates the pipeline.
+    pub fn new(
+        ctx: &Arc<Context>,
+        layout: &Owned<vk::PipelineLayout>,
+        specialization: &[u32],
+    ) -> Result<Self> {
+        Ok(Self {
+            pipeline: pipeline(ctx, layout, specialization)?,
+        })
+    }
+
+    /// Records the compose pass: reads the G-buffer, the splat sums and the shadow maps (sampled),
+    /// writes `output` (left sampled).
+    pub fn record(&self, p: &FramePass<'_>, im: &mut FrameImages<Image>) {
+        transition(p.ctx, p.cmd, &mut [(&mut im.output, Access::Attachment)]);
+        begin_rendering(p.ctx, p.cmd, &[(&im.output, Load::Clear)]);
+        let mut constants = p.constants;
+        constants.sizes[0] = im.output.extent.width;
+        constants.sizes[1] = im.output.extent.height;
+        p.bind(&self.pipeline, &constants);
+        p.draw(vk::Buffer::null(), 3, 1);
+        end_rendering(p.ctx, p.cmd);
+        transition(p.ctx, p.cmd, &mut [(&mut im.output, Access::Sampled)]);
+    }
+}
+
+fn pipeline(
     ctx: &Arc<Context>,
     layout: &Owned<vk::PipelineLayout>,
     specialization: &[u32],
@@ -33,21 +63,4 @@ pub fn pipeline(
         specialization,
     );
     create(ctx, layout, &desc)
-}
-
-/// Records the compose pass into the output image.
-pub fn record(
-    p: &FramePass<'_>,
-    pipeline: &Owned<vk::Pipeline>,
-    im: &mut FrameImages<Image>,
-    mut constants: FrameConstants,
-) {
-    transition(p.ctx, p.cmd, &mut [(&mut im.output, Access::Attachment)]);
-    begin_rendering(p.ctx, p.cmd, &[(&im.output, Load::Clear)]);
-    constants.sizes[0] = im.output.extent.width;
-    constants.sizes[1] = im.output.extent.height;
-    p.bind(pipeline, &constants);
-    p.draw(vk::Buffer::null(), 3, 1);
-    end_rendering(p.ctx, p.cmd);
-    transition(p.ctx, p.cmd, &mut [(&mut im.output, Access::Sampled)]);
 }

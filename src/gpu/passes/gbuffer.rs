@@ -5,12 +5,12 @@
 
 use super::shadow::POSITION;
 use super::targets::{FrameImages, RGBA32F};
-use super::{begin_rendering_with_depth, end_rendering, frame_desc, FramePass, Load};
+use super::{begin_rendering_with_depth, end_rendering, frame_desc, FramePass, Load, Source};
 use crate::error::Result;
 use crate::gpu::barrier::{transition, Access};
 use crate::gpu::context::Context;
 use crate::gpu::handle::Owned;
-use crate::gpu::layout::{CornerVertex, FrameConstants};
+use crate::gpu::layout::CornerVertex;
 use crate::gpu::memory::Image;
 use crate::gpu::pipelines::{create, PipelineDesc, Target};
 use crate::plan::Features;
@@ -30,9 +30,36 @@ fn target_count(f: &Features) -> usize {
     }
 }
 
-/// The pipeline: corners with leaf, shared vertex and shading normal; position (+ vertex
-/// radiance, + shading normal, as `features` need them) targets, depth-tested.
-pub fn pipeline(
+/// The G-buffer pass: its pipeline (corners with leaf, shared vertex and shading normal;
+/// position, + vertex radiance, + shading normal targets as the features need them,
+/// depth-tested) and those features.
+pub struct GBuffer {
+    pipeline: Owned<vk::Pipeline>,
+    features: Features,
+}
+
+impl GBuffer {
+    /// Creates the pipeline for a scene with `features`.
+    pub fn new(
+        ctx: &Arc<Context>,
+        layout: &Owned<vk::PipelineLayout>,
+        specialization: &[u32],
+        features: &Features,
+    ) -> Result<Self> {
+        Ok(Self {
+            pipeline: pipeline(ctx, layout, specialization, features)?,
+            features: *features,
+        })
+    }
+
+    /// Records the G-buffer pass drawing `corners`: writes `gbuf_position` (+ `gbuf_vertex`,
+    /// + `gbuf_normal`, [`target_count`]) and `gbuf_depth`; leaves the colour targets sampled.
+    pub fn record(&self, p: &FramePass<'_>, im: &mut FrameImages<Image>, corners: Source) {
+        record(&self.pipeline, &self.features, p, im, corners)
+    }
+}
+
+fn pipeline(
     ctx: &Arc<Context>,
     layout: &Owned<vk::PipelineLayout>,
     specialization: &[u32],
@@ -65,16 +92,12 @@ pub fn pipeline(
     create(ctx, layout, &desc)
 }
 
-/// Records the G-buffer pass with the targets `features` need ([`target_count`]).
-#[allow(clippy::too_many_arguments)]
-pub fn record(
-    p: &FramePass<'_>,
+fn record(
     pipeline: &Owned<vk::Pipeline>,
-    im: &mut FrameImages<Image>,
-    corners: vk::Buffer,
-    corner_count: u32,
-    constants: FrameConstants,
     features: &Features,
+    p: &FramePass<'_>,
+    im: &mut FrameImages<Image>,
+    corners: Source,
 ) {
     let count = target_count(features);
     let mut colors = vec![&mut im.gbuf_position];
@@ -100,8 +123,8 @@ pub fn record(
         &attachments,
         Some((&im.gbuf_depth, Load::Clear)),
     );
-    p.bind(pipeline, &constants);
-    p.draw(corners, corner_count, 1);
+    p.bind(pipeline, &p.constants);
+    p.draw(corners.buffer, corners.count, 1);
     end_rendering(p.ctx, p.cmd);
     for t in to_attachment.iter_mut() {
         t.1 = Access::Sampled;

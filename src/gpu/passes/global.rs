@@ -17,8 +17,26 @@ use crate::gpu::pipelines::{create, PipelineDesc};
 use crate::gpu::resources::Resources;
 use ash::vk;
 
-/// The global pass's pipeline: link records pulled by vertex index, additive into L_in.
-pub fn pipeline(spec: &PipelineSpec<'_>) -> Result<Owned<vk::Pipeline>> {
+/// The global pass: its pipeline (link records pulled by vertex index, additive into L_in).
+pub struct Global {
+    pipeline: Owned<vk::Pipeline>,
+}
+
+impl Global {
+    /// Creates the pipeline.
+    pub fn new(spec: &PipelineSpec<'_>) -> Result<Self> {
+        Ok(Self {
+            pipeline: pipeline(spec)?,
+        })
+    }
+
+    /// Records the global pass reading `leaf_ex(cur)` and both cluster images into L_in.
+    pub fn record(&self, p: &Pass<'_>, res: &mut Resources, cur: usize) {
+        record(&self.pipeline, p, res, cur)
+    }
+}
+
+fn pipeline(spec: &PipelineSpec<'_>) -> Result<Owned<vk::Pipeline>> {
     let targets = [spec.accumulate()];
     let constants = spec.constants(crate::gpu::layout::mode::BOTH, false);
     let desc = PipelineDesc {
@@ -37,8 +55,7 @@ pub fn pipeline(spec: &PipelineSpec<'_>) -> Result<Owned<vk::Pipeline>> {
     create(spec.ctx, spec.layout, &desc)
 }
 
-/// Records the global pass reading `leaf_ex(cur)` and both cluster images.
-pub fn record(p: &Pass<'_>, res: &mut Resources, cur: usize) {
+fn record(pipeline: &Owned<vk::Pipeline>, p: &Pass<'_>, res: &mut Resources, cur: usize) {
     let im = &mut res.images;
     let leaf = if cur == 0 {
         &mut im.leaf_ex0
@@ -63,7 +80,7 @@ pub fn record(p: &Pass<'_>, res: &mut Resources, cur: usize) {
     for d in res.link_chunks.pieces(&res.plan.draw.link_buckets) {
         if bound != Some((d.chunk, d.sender)) {
             let set = res.set_for_chunk(cur, d.chunk);
-            p.bind_global(&p.pipes.global, extent, d.sender, set);
+            p.bind_global(pipeline, extent, d.sender, set);
             bound = Some((d.chunk, d.sender));
         }
         // Record k of the chunk is pulled by vertex index 2k + … (fits 32 bits: a chunk

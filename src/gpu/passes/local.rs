@@ -14,8 +14,56 @@ use crate::gpu::profiler::{label_begin, label_end};
 use crate::gpu::resources::Resources;
 use ash::vk;
 
+/// The local pass: the irradiance step's pipeline, and the reflection + antiradiance
+/// pipelines by mode for the Lambertian and the glossy runs (made for the modes and materials in
+/// use, by [`Local::ensure`]).
+pub struct Local {
+    irradiance: Owned<vk::Pipeline>,
+    diffuse: [Option<Owned<vk::Pipeline>>; 3],
+    glossy: [Option<Owned<vk::Pipeline>>; 3],
+}
+
+impl Local {
+    /// Creates the irradiance step's pipeline; the others come with [`Local::ensure`].
+    pub fn new(spec: &PipelineSpec<'_>) -> Result<Self> {
+        Ok(Self {
+            irradiance: irradiance_pipeline(spec)?,
+            diffuse: [None, None, None],
+            glossy: [None, None, None],
+        })
+    }
+
+    /// Creates the variants for `m` (a [`mode`] value) that `res` will draw.
+    pub fn ensure(&mut self, spec: &PipelineSpec<'_>, res: &Resources, m: u32) -> Result<()> {
+        let draw = res.draw();
+        for (glossy, slot, needed) in [
+            (
+                false,
+                &mut self.diffuse[m as usize],
+                !draw.diffuse_quads.is_empty(),
+            ),
+            (
+                true,
+                &mut self.glossy[m as usize],
+                !draw.glossy_quads.is_empty(),
+            ),
+        ] {
+            if slot.is_none() && needed {
+                *slot = Some(pipeline(spec, m, glossy)?);
+            }
+        }
+        Ok(())
+    }
+
+    /// Records the local pass in `m` (a [`mode`] value), reading `leaf_ex(cur)`, writing
+    /// `leaf_ex(1-cur)` and I_total.
+    pub fn record(&self, p: &Pass<'_>, res: &mut Resources, cur: usize, m: u32) {
+        record(self, p, res, cur, m)
+    }
+}
+
 /// The irradiance step's pipeline: one texel per row into the irradiance image.
-pub fn irradiance_pipeline(s: &PipelineSpec<'_>) -> Result<Owned<vk::Pipeline>> {
+fn irradiance_pipeline(s: &PipelineSpec<'_>) -> Result<Owned<vk::Pipeline>> {
     let targets = [s.put()];
     let constants = s.constants(mode::BOTH, false);
     let desc = quad_desc(
@@ -28,7 +76,7 @@ pub fn irradiance_pipeline(s: &PipelineSpec<'_>) -> Result<Owned<vk::Pipeline>> 
 }
 
 /// The local pass's pipeline for `m` (a [`mode`] value) over Lambertian or glossy runs.
-pub fn pipeline(s: &PipelineSpec<'_>, m: u32, glossy: bool) -> Result<Owned<vk::Pipeline>> {
+fn pipeline(s: &PipelineSpec<'_>, m: u32, glossy: bool) -> Result<Owned<vk::Pipeline>> {
     // The antiradiance step leaves I_total as it is: write mask off, attachment loaded.
     let targets = [
         s.put(),
@@ -48,9 +96,7 @@ pub fn pipeline(s: &PipelineSpec<'_>, m: u32, glossy: bool) -> Result<Owned<vk::
     )
 }
 
-/// Records the local pass in `m` (a [`mode`] value), reading `leaf_ex(cur)`, writing
-/// `leaf_ex(1-cur)`.
-pub fn record(p: &Pass<'_>, res: &mut Resources, cur: usize, m: u32) {
+fn record(pass: &Local, p: &Pass<'_>, res: &mut Resources, cur: usize, m: u32) {
     let im = &mut res.images;
     let draw = &res.plan.draw;
     let bins = res.plan.layout.bins;
@@ -67,7 +113,7 @@ pub fn record(p: &Pass<'_>, res: &mut Resources, cur: usize, m: u32) {
         ],
     );
     begin_rendering(p.ctx, p.cmd, &[(&im.irradiance_t, Load::Clear)]);
-    p.bind(&p.pipes.irradiance, im.irradiance_t.extent, 1);
+    p.bind(&pass.irradiance, im.irradiance_t.extent, 1);
     p.draw(res.buffers.leaf_quads.raw, 4, draw.leaf_quads.len());
     end_rendering(p.ctx, p.cmd);
     label_end(p.ctx, p.cmd);
@@ -102,13 +148,13 @@ pub fn record(p: &Pass<'_>, res: &mut Resources, cur: usize, m: u32) {
     let extent = new.extent;
     let runs = [
         (
-            &p.pipes.diffuse,
+            &pass.diffuse,
             "local_diffuse",
             &res.buffers.diffuse_quads,
             draw.diffuse_quads.len(),
         ),
         (
-            &p.pipes.glossy,
+            &pass.glossy,
             "local_glossy",
             &res.buffers.glossy_quads,
             draw.glossy_quads.len(),

@@ -18,7 +18,6 @@ use super::handle::Owned;
 use super::layout::{FrameConstants, PassConstants};
 use super::memory::Image;
 use super::pipelines::Target;
-use super::resources::Resources;
 use crate::error::Result;
 use crate::plan::Features;
 use ash::vk;
@@ -100,62 +99,29 @@ pub enum Load {
     Keep,
 }
 
-/// The solver's pipelines; local variants exist only for the modes and materials in use.
-pub struct SolverPipelines {
+/// The solver's passes, each owning its pipelines (the local pass's variants exist only for the
+/// modes and materials in use).
+pub struct SolverPasses {
     /// Global lines, additive into L_in.
-    pub global: Owned<vk::Pipeline>,
+    pub global: global::Global,
     /// Push quads (one per node tile): even depths into L_push, odd depths added onto L_in.
-    pub push: [Owned<vk::Pipeline>; 2],
-    /// Irradiance quads (one texel per row).
-    pub irradiance: Owned<vk::Pipeline>,
-    /// Local pass, Lambertian runs, by mode.
-    pub diffuse: [Option<Owned<vk::Pipeline>>; 3],
-    /// Local pass, glossy runs, by mode.
-    pub glossy: [Option<Owned<vk::Pipeline>>; 3],
+    pub push: push::Push,
+    /// Irradiance quads, then reflection + antiradiance by mode.
+    pub local: local::Local,
     /// Pull lines: into even-depth clusters, into odd-depth clusters.
-    pub pull: [Owned<vk::Pipeline>; 2],
+    pub pull: pull::Pull,
 }
 
-impl SolverPipelines {
-    /// Creates the pipelines every solve needs (local variants are added by
-    /// [`SolverPipelines::ensure_local`]).
+impl SolverPasses {
+    /// Creates the passes every solve needs (local variants are added by
+    /// [`local::Local::ensure`]).
     pub fn new(spec: &PipelineSpec<'_>) -> Result<Self> {
         Ok(Self {
-            global: global::pipeline(spec)?,
-            push: push::pipelines(spec)?,
-            irradiance: local::irradiance_pipeline(spec)?,
-            diffuse: [None, None, None],
-            glossy: [None, None, None],
-            pull: pull::pipelines(spec)?,
+            global: global::Global::new(spec)?,
+            push: push::Push::new(spec)?,
+            local: local::Local::new(spec)?,
+            pull: pull::Pull::new(spec)?,
         })
-    }
-
-    /// Creates the local-pass variants for `mode` (a [`super::layout::mode`] value) that `res`
-    /// will draw.
-    pub fn ensure_local(
-        &mut self,
-        spec: &PipelineSpec<'_>,
-        res: &Resources,
-        mode: u32,
-    ) -> Result<()> {
-        let draw = res.draw();
-        for (glossy, slot, needed) in [
-            (
-                false,
-                &mut self.diffuse[mode as usize],
-                !draw.diffuse_quads.is_empty(),
-            ),
-            (
-                true,
-                &mut self.glossy[mode as usize],
-                !draw.glossy_quads.is_empty(),
-            ),
-        ] {
-            if slot.is_none() && needed {
-                *slot = Some(local::pipeline(spec, mode, glossy)?);
-            }
-        }
-        Ok(())
     }
 }
 
@@ -276,8 +242,6 @@ pub struct Pass<'a> {
     pub cmd: vk::CommandBuffer,
     /// Pipeline layout.
     pub layout: vk::PipelineLayout,
-    /// Pipelines.
-    pub pipes: &'a SolverPipelines,
     /// Descriptor set of the current ping-pong parity.
     pub set: vk::DescriptorSet,
     /// Push constants with the scene-wide fields filled in.
@@ -360,6 +324,17 @@ pub struct FramePass<'a> {
     pub layout: vk::PipelineLayout,
     /// Frame descriptor set.
     pub set: vk::DescriptorSet,
+    /// Push constants of this recording (each pass sets the fields that are its own).
+    pub constants: FrameConstants,
+}
+
+/// Vertices (or instances) a frame pass draws: a vertex buffer and how many records it holds.
+#[derive(Clone, Copy)]
+pub struct Source {
+    /// The buffer.
+    pub buffer: vk::Buffer,
+    /// Its records.
+    pub count: u32,
 }
 
 impl FramePass<'_> {

@@ -12,8 +12,26 @@ use crate::gpu::pipelines::{create, Target};
 use crate::gpu::resources::{Resources, CLUSTER_FORMAT};
 use ash::vk;
 
-/// The pull pipelines: into even-depth clusters (children odd), into odd-depth ones.
-pub fn pipelines(spec: &PipelineSpec<'_>) -> Result<[Owned<vk::Pipeline>; 2]> {
+/// The pull pass: its pipelines, into even-depth clusters (children odd), into odd-depth ones.
+pub struct Pull {
+    pipelines: [Owned<vk::Pipeline>; 2],
+}
+
+impl Pull {
+    /// Creates the pipelines.
+    pub fn new(spec: &PipelineSpec<'_>) -> Result<Self> {
+        Ok(Self {
+            pipelines: pipelines(spec)?,
+        })
+    }
+
+    /// Records the pull pass reading `leaf_ex(next)`, deepest clusters first.
+    pub fn record(&self, p: &Pass<'_>, res: &mut Resources, next: usize) {
+        record(&self.pipelines, p, res, next)
+    }
+}
+
+fn pipelines(spec: &PipelineSpec<'_>) -> Result<[Owned<vk::Pipeline>; 2]> {
     let put = [Target {
         format: CLUSTER_FORMAT,
         additive: false,
@@ -34,8 +52,7 @@ pub fn pipelines(spec: &PipelineSpec<'_>) -> Result<[Owned<vk::Pipeline>; 2]> {
     ])
 }
 
-/// Records the pull pass reading `leaf_ex(next)`, deepest clusters first.
-pub fn record(p: &Pass<'_>, res: &mut Resources, next: usize) {
+fn record(pipelines: &[Owned<vk::Pipeline>; 2], p: &Pass<'_>, res: &mut Resources, next: usize) {
     let im = &mut res.images;
     let bins = res.plan.layout.bins;
     let leaf = if next == 0 {
@@ -60,7 +77,7 @@ pub fn record(p: &Pass<'_>, res: &mut Resources, next: usize) {
             ],
         );
         begin_rendering(p.ctx, p.cmd, &[(&*target, Load::Keep)]);
-        p.bind(&p.pipes.pull[odd as usize], target.extent, bins);
+        p.bind(&pipelines[odd as usize], target.extent, bins);
         p.draw_range(
             res.buffers.pull.raw,
             2,

@@ -75,8 +75,26 @@ pub fn row_desc<'a>(
     }
 }
 
-/// The push pipelines: even depths written into L_push, odd depths added onto L_in.
-pub fn pipelines(spec: &PipelineSpec<'_>) -> Result<[Owned<vk::Pipeline>; 2]> {
+/// The push pass: its pipelines, even depths written into L_push, odd depths added onto L_in.
+pub struct Push {
+    pipelines: [Owned<vk::Pipeline>; 2],
+}
+
+impl Push {
+    /// Creates the pipelines.
+    pub fn new(spec: &PipelineSpec<'_>) -> Result<Self> {
+        Ok(Self {
+            pipelines: pipelines(spec)?,
+        })
+    }
+
+    /// Records the push pass, depth by depth (L_in → L_push / L_in by parity).
+    pub fn record(&self, p: &Pass<'_>, res: &mut Resources) {
+        record(&self.pipelines, p, res)
+    }
+}
+
+fn pipelines(spec: &PipelineSpec<'_>) -> Result<[Owned<vk::Pipeline>; 2]> {
     let put = [Target {
         additive: false,
         ..spec.accumulate()
@@ -97,8 +115,7 @@ pub fn pipelines(spec: &PipelineSpec<'_>) -> Result<[Owned<vk::Pipeline>; 2]> {
     ])
 }
 
-/// Records the push pass, depth by depth (L_in → L_push / L_in by parity).
-pub fn record(p: &Pass<'_>, res: &mut Resources) {
+fn record(pipelines: &[Owned<vk::Pipeline>; 2], p: &Pass<'_>, res: &mut Resources) {
     let im = &mut res.images;
     let bins = res.plan.layout.bins;
     for (d, range) in res.plan.draw.push_levels.iter().enumerate() {
@@ -117,7 +134,7 @@ pub fn record(p: &Pass<'_>, res: &mut Resources) {
             ],
         );
         begin_rendering(p.ctx, p.cmd, &[(&*target, Load::Keep)]);
-        p.bind(&p.pipes.push[odd as usize], target.extent, bins);
+        p.bind(&pipelines[odd as usize], target.extent, bins);
         p.draw_range(
             res.buffers.push.raw,
             4,

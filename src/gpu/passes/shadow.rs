@@ -2,13 +2,13 @@
 //! square of one R32F atlas, keeping the nearest linear distance (depth-tested).
 
 use super::targets::FrameImages;
-use super::{begin_rendering_with_depth, end_rendering, frame_desc, FramePass, Load};
+use super::{begin_rendering_with_depth, end_rendering, frame_desc, FramePass, Load, Source};
 use crate::error::Result;
 use crate::frame::shadow::EMPTY;
 use crate::gpu::barrier::{transition, Access};
 use crate::gpu::context::Context;
 use crate::gpu::handle::Owned;
-use crate::gpu::layout::{CornerVertex, FrameConstants};
+use crate::gpu::layout::CornerVertex;
 use crate::gpu::memory::Image;
 use crate::gpu::pipelines::{create, PipelineDesc, Target};
 use ash::vk;
@@ -17,8 +17,40 @@ use std::sync::Arc;
 /// Corner positions as vertex input (the shadow and G-buffer passes).
 pub const POSITION: (vk::Format, u32) = (vk::Format::R32G32B32_SFLOAT, 0);
 
-/// The pipeline: corners as triangles, nearest linear distance per texel (depth-tested).
-pub fn pipeline(
+/// The shadow-map pass: its pipeline, corners as triangles, nearest linear distance per texel
+/// (depth-tested).
+pub struct Shadow {
+    pipeline: Owned<vk::Pipeline>,
+}
+
+impl Shadow {
+    /// Creates the pipeline.
+    pub fn new(
+        ctx: &Arc<Context>,
+        layout: &Owned<vk::PipelineLayout>,
+        specialization: &[u32],
+    ) -> Result<Self> {
+        Ok(Self {
+            pipeline: pipeline(ctx, layout, specialization)?,
+        })
+    }
+
+    /// Records the views drawing `corners`, each into its atlas square `rects[v]` (x, y, side):
+    /// every view, or with `only`, the views it marks (their squares cleared first, the others'
+    /// maps kept). Writes `shadow_map` (left sampled) and `shadow_depth`.
+    pub fn record(
+        &self,
+        p: &FramePass<'_>,
+        im: &mut FrameImages<Image>,
+        corners: Source,
+        rects: &[[u32; 3]],
+        only: Option<&[bool]>,
+    ) {
+        record(&self.pipeline, p, im, corners, rects, only)
+    }
+}
+
+fn pipeline(
     ctx: &Arc<Context>,
     layout: &Owned<vk::PipelineLayout>,
     specialization: &[u32],
@@ -44,19 +76,15 @@ pub fn pipeline(
     create(ctx, layout, &desc)
 }
 
-/// Records the views, each into its atlas square `rects[v]` (x, y, side): every view, or with
-/// `only`, the views it marks (their squares cleared first, the others' maps kept).
-#[allow(clippy::too_many_arguments)]
-pub fn record(
-    p: &FramePass<'_>,
+fn record(
     pipeline: &Owned<vk::Pipeline>,
+    p: &FramePass<'_>,
     im: &mut FrameImages<Image>,
-    corners: vk::Buffer,
-    corner_count: u32,
+    corners: Source,
     rects: &[[u32; 3]],
     only: Option<&[bool]>,
-    mut constants: FrameConstants,
 ) {
+    let mut constants = p.constants;
     transition(
         p.ctx,
         p.cmd,
@@ -110,7 +138,7 @@ pub fn record(
         }
         constants.misc[1] = v as u32;
         p.push(&constants);
-        p.draw(corners, corner_count, 1);
+        p.draw(corners.buffer, corners.count, 1);
     }
     end_rendering(p.ctx, p.cmd);
     transition(p.ctx, p.cmd, &mut [(&mut im.shadow_map, Access::Sampled)]);

@@ -2,12 +2,11 @@
 //! into (Σ w·L, Σ w) where the G-buffer shows the same surface. Compose normalizes.
 
 use super::targets::{FrameImages, RGBA32F};
-use super::{begin_rendering, end_rendering, frame_desc, FramePass, Load};
+use super::{begin_rendering, end_rendering, frame_desc, FramePass, Load, Source};
 use crate::error::Result;
 use crate::gpu::barrier::{transition, Access};
 use crate::gpu::context::Context;
 use crate::gpu::handle::Owned;
-use crate::gpu::layout::FrameConstants;
 use crate::gpu::memory::Image;
 use crate::gpu::pipelines::{create, PipelineDesc, Target};
 use ash::vk;
@@ -16,8 +15,36 @@ use std::sync::Arc;
 /// Triangles per fan × 3.
 pub const FAN_VERTICES: u32 = 24;
 
-/// The pipeline: one fan per leaf-slot instance, additive.
-pub fn pipeline(
+/// The splat pass: its pipeline, one fan per leaf-slot instance, additive.
+pub struct Splat {
+    pipeline: Owned<vk::Pipeline>,
+}
+
+impl Splat {
+    /// Creates the pipeline.
+    pub fn new(
+        ctx: &Arc<Context>,
+        layout: &Owned<vk::PipelineLayout>,
+        specialization: &[u32],
+    ) -> Result<Self> {
+        Ok(Self {
+            pipeline: pipeline(ctx, layout, specialization)?,
+        })
+    }
+
+    /// Records the splat pass, one fan per record of `instances` (leaf slots): reads the
+    /// G-buffer (sampled), writes `splat` (left sampled).
+    pub fn record(&self, p: &FramePass<'_>, im: &mut FrameImages<Image>, instances: Source) {
+        transition(p.ctx, p.cmd, &mut [(&mut im.splat, Access::Attachment)]);
+        begin_rendering(p.ctx, p.cmd, &[(&im.splat, Load::Clear)]);
+        p.bind(&self.pipeline, &p.constants);
+        p.draw(instances.buffer, FAN_VERTICES, instances.count);
+        end_rendering(p.ctx, p.cmd);
+        transition(p.ctx, p.cmd, &mut [(&mut im.splat, Access::Sampled)]);
+    }
+}
+
+fn pipeline(
     ctx: &Arc<Context>,
     layout: &Owned<vk::PipelineLayout>,
     specialization: &[u32],
@@ -40,21 +67,4 @@ pub fn pipeline(
         )
     };
     create(ctx, layout, &desc)
-}
-
-/// Records the splat pass.
-pub fn record(
-    p: &FramePass<'_>,
-    pipeline: &Owned<vk::Pipeline>,
-    im: &mut FrameImages<Image>,
-    instances: vk::Buffer,
-    count: u32,
-    constants: FrameConstants,
-) {
-    transition(p.ctx, p.cmd, &mut [(&mut im.splat, Access::Attachment)]);
-    begin_rendering(p.ctx, p.cmd, &[(&im.splat, Load::Clear)]);
-    p.bind(pipeline, &constants);
-    p.draw(instances, FAN_VERTICES, count);
-    end_rendering(p.ctx, p.cmd);
-    transition(p.ctx, p.cmd, &mut [(&mut im.splat, Access::Sampled)]);
 }
