@@ -1,7 +1,9 @@
 //! The four operations of §4.2 as raster passes — [`global`], [`push`], [`local`], [`pull`] —
-//! and what they share: attachment load/clear, push constants, the [`SolverPipelines`] made
-//! from each pass's own pipeline description. The frame passes (§3.3, §4.3) — [`shadow`],
-//! [`gbuffer`], [`splat`], [`compose`] — use [`FramePass`] and the image set of [`targets`].
+//! and what they share: attachment load/clear, push constants, [`SolverPasses`]. Each pass is a
+//! struct that owns its pipelines (made from its own description in `new`) and records itself
+//! (`record`) from a small context ([`Pass`]; [`FramePass`] for the frame passes of §3.3 and
+//! §4.3 — [`shadow`], [`gbuffer`], [`splat`], [`compose`] — with the image set of [`targets`]);
+//! dropping the struct frees its pipelines.
 
 pub mod compose;
 pub mod gbuffer;
