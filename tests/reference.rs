@@ -1,6 +1,7 @@
 //! The path-traced reference against analytic answers: the closed uniform box with an occluder
-//! (Le/(1−ρ) everywhere), a plane under a point light, and a glossy plane under a constant
-//! environment (the Phong lobe's sampling and density); determinism for a seed.
+//! (Le/(1−ρ) everywhere), a plane under a point light, a glossy plane under a constant
+//! environment (the Phong lobe's sampling and density), a floor under a square emitter behind a
+//! square occluder (its occlusion, in closed form); determinism for a seed.
 
 mod common;
 
@@ -282,5 +283,117 @@ fn area_light_on_a_glossy_plane_matches_quadrature() {
         want,
         sigma,
         1e-4 * want,
+    );
+}
+
+/// Form factor from a differential area to a parallel rectangle of sides `a`, `b` at distance
+/// `h`, lying under one of its corners (Howell's catalogue, C-3).
+fn corner_factor(a: f64, b: f64, h: f64) -> f64 {
+    let (x, y) = (a / h, b / h);
+    let (sx, sy) = ((1.0 + x * x).sqrt(), (1.0 + y * y).sqrt());
+    (x / sx * (y / sx).atan() + y / sy * (x / sy).atan()) / (2.0 * PI)
+}
+
+/// Form factor from a point `p` of the floor (facing +y) to the rectangle `x × z` at height `h`
+/// above the floor, parallel to it (superposition of corner configurations); 0 when empty.
+fn rect_factor(p: DVec3, x: [f64; 2], z: [f64; 2], h: f64) -> f64 {
+    if x[1] <= x[0] || z[1] <= z[0] {
+        return 0.0;
+    }
+    let f = |u: f64, v: f64| u.signum() * v.signum() * corner_factor(u.abs(), v.abs(), h - p.y);
+    let (u0, u1, v0, v1) = (x[0] - p.x, x[1] - p.x, z[0] - p.z, z[1] - p.z);
+    f(u1, v1) - f(u0, v1) - f(u1, v0) + f(u0, v0)
+}
+
+/// The path tracer's own occlusion, in closed form: a diffuse floor under a parallel square
+/// emitter (Le = 1, height 1) with a black square occluder parallel between them (height 0.5).
+/// From a floor point p the occluder covers, on the emitter's plane, its own square scaled by 2
+/// about p, so the visible emitter is the emitter less that rectangle and the floor's direct
+/// radiance is kd·Le·(F(emitter) − F(emitter ∩ shadow)), a penumbra that moves across every pixel.
+/// A tracer that ignored occluders, or let rays through an edge, would be off by up to the whole
+/// occluded part (about 60% at the center).
+#[test]
+fn floor_under_an_occluded_square_emitter_matches_the_closed_form() {
+    let (kd, h, ho) = (0.8, 1.0, 0.5);
+    let (ex, ez) = ([-0.5, 0.5], [-0.5, 0.5]);
+    let (ox, oz) = ([-0.15, 0.25], [-0.2, 0.2]);
+    let mut s = Scene::empty();
+    let m = s.add_material(Material::diffuse("floor", kd));
+    let lamp_m = s.add_material(Material {
+        ke: DVec3::ONE,
+        ..Material::diffuse("lamp", 0.0)
+    });
+    let black = s.add_material(Material::diffuse("occluder", 0.0));
+    floor(&mut s, 4.0, m);
+    lamp(&mut s, 0.5, h, lamp_m);
+    // Facing down (the floor sees its front).
+    quad(
+        &mut s,
+        "occluder",
+        [
+            DVec3::new(ox[0], ho, oz[0]),
+            DVec3::new(ox[1], ho, oz[0]),
+            DVec3::new(ox[1], ho, oz[1]),
+            DVec3::new(ox[0], ho, oz[1]),
+        ],
+        black,
+    );
+    // Looking straight down from under the occluder: every camera ray goes down to the floor.
+    s.camera.eye = DVec3::new(0.0, 0.4, 0.0);
+    s.camera.target = DVec3::ZERO;
+    s.camera.up = DVec3::NEG_Z;
+    s.camera.fov_y_deg = 100.0;
+    let n = 32u32;
+    s.camera.width = n;
+    s.camera.height = n;
+    let r = trace(&s, 256, Some(1));
+    let view = View::new(&s.camera);
+    // The occluder's extent [a, b] along one axis seen from coordinate c, on the emitter's plane.
+    let shadow = |c: f64, e: [f64; 2]| -> [f64; 2] {
+        [c + (e[0] - c) * h / ho, c + (e[1] - c) * h / ho]
+    };
+    let visible = |p: DVec3| -> f64 {
+        let (sx, sz) = (shadow(p.x, ox), shadow(p.z, oz));
+        let ix = [sx[0].max(ex[0]), sx[1].min(ex[1])];
+        let iz = [sz[0].max(ez[0]), sz[1].min(ez[1])];
+        rect_factor(p, ex, ez, h) - rect_factor(p, ix, iz, h)
+    };
+    let (mut worst, mut min_frac) = (0f64, 1f64);
+    let (mut sum_got, mut sum_want) = (0.0, 0.0);
+    for y in 0..n {
+        for x in 0..n {
+            // The pixel's box filter, by 8×8 quadrature.
+            let k = 8;
+            let mut want = 0.0;
+            for j in 0..k {
+                for i in 0..k {
+                    let d = view.ray(
+                        x as f64 + (i as f64 + 0.5) / k as f64,
+                        y as f64 + (j as f64 + 0.5) / k as f64,
+                    );
+                    let p = view.eye + d * (-view.eye.y / d.y);
+                    want += kd * visible(p);
+                    min_frac = min_frac.min(visible(p) / rect_factor(p, ex, ez, h));
+                }
+            }
+            want /= (k * k) as f64;
+            let got = lum(r.image.at(x, y));
+            let sigma = lum(r.std_error.as_ref().unwrap().at(x, y));
+            worst = worst.max((got - want).abs() / (4.0 * sigma + 0.003 * want));
+            sum_got += got;
+            sum_want += want;
+        }
+    }
+    println!("least visible fraction {min_frac:.3}; worst pixel at {worst:.2} of its bound");
+    assert!(min_frac < 0.5, "the occluder must hide much of the emitter somewhere");
+    assert!(worst <= 1.0, "a pixel is off by {worst:.2}× (4σ + 0.3%)");
+    let (_, sigma) = mean_and_sigma(&r);
+    let px = (n * n) as f64;
+    within_4_sigma(
+        "image mean",
+        sum_got / px,
+        sum_want / px,
+        sigma,
+        2e-4 * sum_want / px,
     );
 }
