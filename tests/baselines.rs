@@ -206,11 +206,12 @@ fn progressive_refinement_unshot_energy_decreases_monotonically() {
 }
 
 /// The bundled Cornell box at 32×32 against the path tracer (1024 spp), over the pixels that see
-/// no emitter (`common::measure`), at the scene's own settings (128 bins). Hierarchical
-/// radiosity (CPU) takes the lamp's direct light from the same shadow-mapped samples as
+/// no emitter (`common::measure`), at the scene's own settings (128 bins), each baseline on both
+/// backends. Hierarchical
+/// radiosity takes the lamp's direct light from the same shadow-mapped samples as
 /// antiradiance (before them, through the bins, it measured 0.280 at 128 bins and needed 512
 /// for 0.109); rays per link hardly move it (4 … 141: 0.1360 … 0.1369 at 64×64, before the
-/// samples). Progressive refinement (GPU) shoots the lamp with exact point-to-triangle kernels,
+/// samples). Progressive refinement shoots the lamp with exact point-to-triangle kernels,
 /// its direct light at element resolution. The "indirect light" figure subtracts antiradiance's
 /// direct-only image, so for progressive refinement it also holds its direct light's error.
 #[test]
@@ -226,9 +227,15 @@ fn cornell_box_against_the_path_tracer() {
         options(Method::Antiradiance, BackendKind::Cpu, 0),
     )
     .image;
-    for (method, backend, bound) in [
-        (Method::HierarchicalRadiosity, BackendKind::Cpu, 0.15),
-        (Method::ProgressiveRadiosity, BackendKind::Gpu, 0.15),
+    // Measured (relative RMSE, mean): hierarchical radiosity 0.0989 / −1.31% (CPU), 0.1007 /
+    // −1.38% (GPU); progressive refinement 0.1117 / −3.02% (CPU), 0.1130 / −3.02% (GPU). The
+    // reference's noise (0.040) is part of each figure, so the bounds are 1.3× the measured
+    // RMSE and 1.5× the mean's bias.
+    for (method, backend, bound, bias) in [
+        (Method::HierarchicalRadiosity, BackendKind::Cpu, 0.13, 0.02),
+        (Method::HierarchicalRadiosity, BackendKind::Gpu, 0.13, 0.02),
+        (Method::ProgressiveRadiosity, BackendKind::Cpu, 0.15, 0.045),
+        (Method::ProgressiveRadiosity, BackendKind::Gpu, 0.15, 0.045),
     ] {
         let t = std::time::Instant::now();
         let r = render_checked(
@@ -243,5 +250,6 @@ fn cornell_box_against_the_path_tracer() {
         );
         assert!(m.noise < bound / 3.0, "reference noise {}", m.noise);
         assert!(m.rel_rmse <= bound, "{method} {backend}: {m}");
+        assert!(m.mean_bias.abs() <= bias, "{method} {backend}: {m}");
     }
 }

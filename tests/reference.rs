@@ -349,9 +349,8 @@ fn floor_under_an_occluded_square_emitter_matches_the_closed_form() {
     let r = trace(&s, 256, Some(1));
     let view = View::new(&s.camera);
     // The occluder's extent [a, b] along one axis seen from coordinate c, on the emitter's plane.
-    let shadow = |c: f64, e: [f64; 2]| -> [f64; 2] {
-        [c + (e[0] - c) * h / ho, c + (e[1] - c) * h / ho]
-    };
+    let shadow =
+        |c: f64, e: [f64; 2]| -> [f64; 2] { [c + (e[0] - c) * h / ho, c + (e[1] - c) * h / ho] };
     let visible = |p: DVec3| -> f64 {
         let (sx, sz) = (shadow(p.x, ox), shadow(p.z, oz));
         let ix = [sx[0].max(ex[0]), sx[1].min(ex[1])];
@@ -385,7 +384,10 @@ fn floor_under_an_occluded_square_emitter_matches_the_closed_form() {
         }
     }
     println!("least visible fraction {min_frac:.3}; worst pixel at {worst:.2} of its bound");
-    assert!(min_frac < 0.5, "the occluder must hide much of the emitter somewhere");
+    assert!(
+        min_frac < 0.5,
+        "the occluder must hide much of the emitter somewhere"
+    );
     assert!(worst <= 1.0, "a pixel is off by {worst:.2}× (4σ + 0.3%)");
     let (_, sigma) = mean_and_sigma(&r);
     let px = (n * n) as f64;
