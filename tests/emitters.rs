@@ -272,3 +272,135 @@ fn emitter_edges_match_the_box_filtered_coverage() {
         assert!(worst_abs < 5e-3, "{backend:?}: {worst_abs}");
     }
 }
+
+/// `poly` clipped by the convex polygon `by` (both counter-clockwise in the image's y-down
+/// coordinates as `project` gives them, i.e. the same winding; Sutherland–Hodgman).
+fn clip_by(poly: &[(f64, f64)], by: &[(f64, f64)]) -> Vec<(f64, f64)> {
+    let mut p = poly.to_vec();
+    // The side of `by`'s first edge its third corner lies on is its inside.
+    let orient = {
+        let (a, b, c) = (by[0], by[1], by[2]);
+        ((b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0)).signum()
+    };
+    for i in 0..by.len() {
+        let (a, b) = (by[i], by[(i + 1) % by.len()]);
+        let f = |q: (f64, f64)| orient * ((b.0 - a.0) * (q.1 - a.1) - (b.1 - a.1) * (q.0 - a.0));
+        let mut out = Vec::new();
+        for k in 0..p.len() {
+            let (s, e) = (p[k], p[(k + 1) % p.len()]);
+            let (fs, fe) = (f(s), f(e));
+            if fs >= 0.0 {
+                out.push(s);
+            }
+            if (fs >= 0.0) != (fe >= 0.0) {
+                let t = fs / (fs - fe);
+                out.push((s.0 + t * (e.0 - s.0), s.1 + t * (e.1 - s.1)));
+            }
+        }
+        p = out;
+        if p.len() < 3 {
+            return Vec::new();
+        }
+    }
+    p
+}
+
+/// An occluder's edge across an emitter: the square of Ke = 10 facing the camera, and a black
+/// square in front of it (halfway to the camera) whose edge, turned 15°, crosses the emitter's
+/// middle. Every pixel's exact value is Ke times the area, inside the pixel, of the emitter's
+/// projection less the occluder's (polygon clipping, independent of the renderer).
+///
+/// The frame's sub-pixel emitter rays (`frame/edges.rs`) see the emitter's own edges exactly,
+/// but learn of an occluder only from the G-buffer sample of their quarter of the pixel, so the
+/// occluder's edge is resolved at the 2×2 samples: measured over the pixels the occluder's edge
+/// crosses on the emitter (30), the worst is 17.9% of Ke on both backends, the mean absolute
+/// error 6.0% of Ke; over the other pixels the worst is 1.55% of Ke. Bounds 1.5× those
+/// (deterministic; the figure says how far the 2×2 rule is from the box filter: a pixel's
+/// quarter goes wholly to the occluder or to the emitter).
+#[test]
+fn an_occluder_edge_across_an_emitter_against_the_box_filtered_coverage() {
+    let ke = 10.0;
+    let mut s = Scene::empty();
+    let mut lamp = Material::diffuse("lamp", 0.0);
+    lamp.ke = DVec3::splat(ke);
+    let lamp = s.add_material(lamp);
+    let black = s.add_material(Material::diffuse("occluder", 0.0));
+    let emitter = [
+        DVec3::new(-0.5, -0.5, 0.0),
+        DVec3::new(0.5, -0.5, 0.0),
+        DVec3::new(0.5, 0.5, 0.0),
+        DVec3::new(-0.5, 0.5, 0.0),
+    ];
+    quad(&mut s, "lamp", emitter, lamp);
+    let (c, sn) = (15f64.to_radians().cos(), 15f64.to_radians().sin());
+    // The occluder's left edge through (0.05, 0) at z = 1.5, turned 15° from the vertical.
+    let corner = |u: f64, v: f64| DVec3::new(0.05 + u * c - v * sn, u * sn + v * c, 1.5);
+    let occluder = [
+        corner(0.0, -1.0),
+        corner(1.0, -1.0),
+        corner(1.0, 1.0),
+        corner(0.0, 1.0),
+    ];
+    quad(&mut s, "occluder", occluder, black);
+    s.camera.eye = DVec3::new(0.0, 0.0, 3.0);
+    s.camera.target = DVec3::ZERO;
+    s.camera.width = 32;
+    s.camera.height = 32;
+    s.camera.fov_y_deg = 24.0;
+    s.solver.bins = 32;
+    s.solver.element_size = 1.0;
+    s.solver.iterations = 0;
+    s.solver.precision = Precision::F32;
+    let view = View::new(&s.camera);
+    let project = |p: DVec3| {
+        let d = p - view.eye;
+        let z = d.dot(view.forward);
+        (
+            (d.dot(view.right) / z / (view.tan_half * view.aspect) + 1.0) * 0.5 * view.width as f64,
+            (1.0 - d.dot(view.up) / z / view.tan_half) * 0.5 * view.height as f64,
+        )
+    };
+    let e: Vec<(f64, f64)> = emitter.iter().map(|&p| project(p)).collect();
+    let o: Vec<(f64, f64)> = occluder.iter().map(|&p| project(p)).collect();
+    let hidden = clip_by(&e, &o);
+    let area = |poly: &[(f64, f64)], x: u32, y: u32| {
+        if poly.is_empty() {
+            0.0
+        } else {
+            clipped_area(poly, x as f64, y as f64)
+        }
+    };
+    for backend in [Backend::Cpu, Backend::Gpu] {
+        let r = render_checked("occluder edge on an emitter", &s, Options::backend(backend));
+        let (mut worst, mut sum, mut crossed, mut worst_elsewhere) = (0f64, 0.0, 0, 0f64);
+        for y in 0..32u32 {
+            for x in 0..32u32 {
+                let (seen, behind) = (area(&e, x, y), area(&hidden, x, y));
+                let want = ke * (seen - behind);
+                let err = (r.image.at(x, y)[0] as f64 - want).abs() / ke;
+                // The occluder's edge crosses this pixel on the emitter: part hidden, part not.
+                if behind > 1e-9 && seen - behind > 1e-9 && seen > 0.999 {
+                    crossed += 1;
+                    worst = worst.max(err);
+                    sum += err;
+                } else if behind <= 1e-9 || seen - behind <= 1e-9 {
+                    worst_elsewhere = worst_elsewhere.max(err);
+                }
+            }
+        }
+        let mean = sum / crossed as f64;
+        println!(
+            "{backend:?}: {crossed} pixels crossed by the occluder's edge on the emitter: worst {:.2}% of Ke, mean {:.2}%; elsewhere worst {:.2}%",
+            100.0 * worst,
+            100.0 * mean,
+            100.0 * worst_elsewhere
+        );
+        assert!(crossed >= 8, "{crossed} crossed pixels");
+        assert!(worst < 0.27, "{backend:?}: worst {worst}");
+        assert!(mean < 0.09, "{backend:?}: mean {mean}");
+        assert!(
+            worst_elsewhere < 0.025,
+            "{backend:?}: elsewhere {worst_elsewhere}"
+        );
+    }
+}
