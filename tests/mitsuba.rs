@@ -151,6 +151,7 @@ fn veach_bidir_xml_is_its_toml() {
     };
     let ratio = mean(&r.image) / mean(&reference);
     println!("veach-bidir XML against Mitsuba 3: mean ratio {ratio:.3}");
+    common::record("veach.mitsuba-ratio", ratio, 0.02);
     assert!((ratio - 1.0).abs() < 0.35, "{ratio}");
 }
 
@@ -424,6 +425,8 @@ fn the_subset_renders_as_mitsuba_3_renders_it() {
             "{backend}: relative RMSE {:.4}, mean ratio {ratio:.5}",
             m.rel_rmse
         );
+        common::record(&format!("mitsuba-subset.{backend}"), m.rel_rmse, 0.02);
+        common::record(&format!("mitsuba-subset.{backend}.mean"), ratio - 1.0, 0.5);
         // 0.085 measured on both (silhouettes of the tessellated sphere, penumbrae, Mitsuba's
         // noise); the means 0.12% apart.
         assert!(m.rel_rmse < 0.2, "{backend}: {}", m.rel_rmse);

@@ -118,6 +118,11 @@ fn frames_against_scratch(o: &Options, frames: usize, fps: f64) -> Vec<f64> {
 #[test]
 fn cpu_frames_match_render_at_their_time() {
     let errors = frames_against_scratch(&options(BackendKind::Cpu), 3, 6.0);
+    common::record(
+        "moving.cpu",
+        errors.iter().copied().fold(0.0, f64::max),
+        0.05,
+    );
     for e in &errors {
         assert!(*e < 0.018, "frame error {e} (all: {errors:?})");
     }
@@ -131,6 +136,11 @@ fn cpu_frames_match_render_at_their_time() {
 fn gpu_frames_match_render_at_their_time() {
     let o = options(BackendKind::Gpu);
     let errors = frames_against_scratch(&o, 3, 6.0);
+    common::record(
+        "moving.gpu",
+        errors.iter().copied().fold(0.0, f64::max),
+        0.05,
+    );
     for e in &errors {
         assert!(*e < 0.042, "frame error {e} (all: {errors:?})");
     }

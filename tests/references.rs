@@ -38,9 +38,11 @@ struct Bounds {
 
 /// Renders `scene` on both backends at its own settings, measures each image against `truth`
 /// and asserts `bounds`; then checks that the bounds discriminate: the CPU solve without
-/// antiradiance (U alone, light through every occluder) must break one of them.
+/// antiradiance (U alone, light through every occluder) must break one of them. Records the
+/// relative RMSE as figures `KEY.cpu`, `KEY.gpu`, `KEY.without` (`common::record`).
 fn check(
     name: &str,
+    key: &str,
     scene: &Scene,
     truth: &Truth,
     bounds: &Bounds,
@@ -69,6 +71,7 @@ fn check(
             cpu_direct = Some(direct);
         }
         println!("{name} {backend}: {m} ({:.1} s)", t.elapsed().as_secs_f64());
+        record(&format!("{key}.{backend}"), m.rel_rmse, 0.02);
         assert!(
             m.noise < bounds.rel_rmse / 5.0,
             "{name}: the reference's noise {:.4} is not small against the bound {}",
@@ -102,6 +105,7 @@ fn check(
         .unwrap();
     let m = measure(&r.image, cpu_direct.as_ref().unwrap(), truth);
     println!("{name} cpu without antiradiance: {m}");
+    record(&format!("{key}.without"), m.rel_rmse, 0.02);
     assert!(
         !within(&m),
         "{name}: the bounds do not tell U alone from the solution"
@@ -263,7 +267,7 @@ fn block_on_a_floor_under_an_emitter() {
         gpu_vs_cpu: 5e-4,
         gpu_vs_cpu_f16: 1.2e-2,
     };
-    check("block on a floor", &s, &truth, &bounds);
+    check("block on a floor", "block", &s, &truth, &bounds);
 }
 
 /// Measured: relative RMSE 0.200, mean +1.0%, indirect light 0.253, and the floor under the
@@ -285,7 +289,7 @@ fn black_and_grey_slabs_between_an_emitter_and_a_floor() {
         gpu_vs_cpu: 1.3e-4,
         gpu_vs_cpu_f16: 0.125,
     };
-    check("slabs", &s, &truth, &bounds);
+    check("slabs", "slabs", &s, &truth, &bounds);
 }
 
 /// Measured: relative RMSE 0.318, mean −0.1%, indirect light 0.299, the corridor floors (215
@@ -305,7 +309,7 @@ fn open_topped_corridors_lit_only_after_reflection() {
         gpu_vs_cpu: 2.5e-3,
         gpu_vs_cpu_f16: 0.17,
     };
-    check("corridors", &s, &truth, &bounds);
+    check("corridors", "corridors", &s, &truth, &bounds);
 }
 
 /// The bundled default scene at its own settings (128 bins, elements 0.25, τ = 1, 8
@@ -331,7 +335,7 @@ fn cornell_box_at_low_resolution() {
         gpu_vs_cpu: 7e-2,
         gpu_vs_cpu_f16: 9e-2,
     };
-    let renders = check("cornell box", &s, &truth, &bounds);
+    let renders = check("cornell box", "cornell", &s, &truth, &bounds);
     // The floor beside the short block (between it and the right wall), where its shadow and
     // the red wall's bleeding meet: the pixels whose center ray reaches the floor at
     // x ∈ [0.74, 0.95], z ∈ [0.2, 0.95] (9 pixels at 32×32, none of them seeing the block); the issue's
@@ -392,7 +396,7 @@ fn glossy_cornell_box_at_low_resolution() {
         gpu_vs_cpu: 3e-2,
         gpu_vs_cpu_f16: 9e-2,
     };
-    check("glossy cornell box", &s, &truth, &bounds);
+    check("glossy cornell box", "glossy", &s, &truth, &bounds);
 }
 
 /// MNRoom at its own settings, 40×30 (the issue asks ≤ 0.15). Measured: relative RMSE 0.090
@@ -416,7 +420,7 @@ fn mnroom_at_low_resolution() {
         gpu_vs_cpu: 4e-4,
         gpu_vs_cpu_f16: 9e-2,
     };
-    check("mnroom", &s, &truth, &bounds);
+    check("mnroom", "mnroom", &s, &truth, &bounds);
 }
 
 /// The bundled dragon room (issue 35: a scanned mesh of 100,000 triangles, without normals, in a
@@ -444,7 +448,7 @@ fn dragon_room_at_low_resolution() {
         gpu_vs_cpu: 1.3e-2,
         gpu_vs_cpu_f16: 9e-2,
     };
-    check("dragon room", &s, &truth, &bounds);
+    check("dragon room", "dragon", &s, &truth, &bounds);
 }
 
 /// The bundled breakfast room (issue 35: 269,538 triangles as converted from its Mitsuba file,
@@ -474,7 +478,7 @@ fn breakfast_room_at_low_resolution() {
         gpu_vs_cpu: 0.13,
         gpu_vs_cpu_f16: 0.13,
     };
-    check("breakfast room", &s, &truth, &bounds);
+    check("breakfast room", "breakfast", &s, &truth, &bounds);
 }
 
 /// A moved pose against the path tracer (not against the project's own `render --time`): the
@@ -524,6 +528,7 @@ fn a_moved_pose_against_the_path_tracer() {
         let m = measure(&image, &direct, &truth);
         let unmoved = measure(&at_rest, &direct, &truth);
         println!("moved pose at {t} s {backend}: {m}; the pose at 0 s against it: {unmoved}");
+        record(&format!("moved.{backend}"), m.rel_rmse, 0.02);
         // Measured: relative RMSE 0.106 on both backends, mean −0.9% (the Cornell box at rest:
         // 0.091 / 0.093); the pose at 0 s is 0.316 off. Bounds 1.4× and 2.2× the measured
         // (the reference's noise, 0.028, is part of the figure).

@@ -6,6 +6,10 @@ use antiradiance::scene::{Material, Scene};
 use glam::DVec3;
 use std::sync::{Arc, OnceLock};
 
+mod figures;
+#[allow(unused_imports)]
+pub use figures::{measurements_dir, record};
+
 /// One headless Vulkan context per test binary, validation on (lavapipe in CI): a validation
 /// message fails the test that reads it.
 pub fn context() -> Arc<Context> {
