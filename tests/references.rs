@@ -313,7 +313,8 @@ fn open_topped_corridors_lit_only_after_reflection() {
 }
 
 /// The bundled default scene at its own settings (128 bins, elements 0.25, τ = 1, 8
-/// iterations), 32×32. Measured: relative RMSE 0.091 (CPU) / 0.093 (GPU), mean +0.2% / +0.0%,
+/// iterations), 32×32. Measured: relative RMSE 0.0935 (CPU) / 0.0953 (GPU) (docs/measurements.json;
+/// 0.091 / 0.093 at 5444d1c), mean +0.2% / +0.0%,
 /// indirect light 0.110, the 214 indirect-only pixels 5.7% off at the median, the floor beside
 /// the short block −2.3% (+10.0% with shadow lookups offset along the normal); GPU vs CPU
 /// 2.4e-2 (raster against ray cast at the blocks' edges). Without antiradiance: 0.291, mean
@@ -404,7 +405,7 @@ fn glossy_cornell_box_at_low_resolution() {
 /// median; GPU vs CPU 1.2e-4 (before the OBJ's `vn` were shading normals, in the frame and the
 /// path tracer alike, its sphere faceted: 0.092, indirect light 0.101, median 5.3%). Its table is modelled inside out; while its faces blocked light at their backs (before
 /// `solids.rs` counted an empty inward-looking closed surface as a solid) it was 0.120, indirect
-/// light 0.226, median 14.5%. Without antiradiance: 0.292, mean +21%.
+/// light 0.226, median 14.5%. Without antiradiance: 0.223 (docs/measurements.json; 0.292 before).
 #[test]
 fn mnroom_at_low_resolution() {
     let mut s =
@@ -425,7 +426,8 @@ fn mnroom_at_low_resolution() {
 
 /// The bundled dragon room (issue 35: a scanned mesh of 100,000 triangles, without normals, in a
 /// closed room), at its own settings, 40×30: its triangles in face clusters (7,786 leaves, 2.36M
-/// links). Measured: relative RMSE 0.0918 (CPU) / 0.0893 (GPU), mean −2.0% / −2.0%, indirect
+/// links). Measured: relative RMSE 0.0942 (CPU) / 0.0918 (GPU) (docs/measurements.json; 0.0918 /
+/// 0.0893 before), mean −2.0% / −2.0%, indirect
 /// light 0.086; GPU vs CPU 4.3e-3 (float32 tables: the plan's range analysis). Without
 /// antiradiance: 0.528, mean +37%. Before the receiver-plane shadow lookup (issue 36):
 /// 0.0965 / 0.0941, mean −0.00%, but its direct light alone was 0.91 relative RMSE from the
@@ -530,7 +532,7 @@ fn a_moved_pose_against_the_path_tracer() {
         println!("moved pose at {t} s {backend}: {m}; the pose at 0 s against it: {unmoved}");
         record(&format!("moved.{backend}"), m.rel_rmse, 0.02);
         // Measured: relative RMSE 0.106 on both backends, mean −0.9% (the Cornell box at rest:
-        // 0.091 / 0.093); the pose at 0 s is 0.316 off. Bounds 1.4× and 2.2× the measured
+        // 0.0935 / 0.0953); the pose at 0 s is 0.316 off. Bounds 1.4× and 2.2× the measured
         // (the reference's noise, 0.028, is part of the figure).
         assert!(m.noise < 0.03, "reference noise {}", m.noise);
         assert!(m.rel_rmse < 0.15, "{backend}: {m}");
