@@ -134,36 +134,26 @@ fn plane_under_a_square_emitter_matches_the_closed_form() {
     }
 }
 
-/// Area of the convex polygon `poly` inside the unit square at `(x0, y0)` (Sutherland–Hodgman
-/// clipping, then the shoelace formula).
+/// Where `p` lands on the image of `view`, in pixels (x right, y down).
+fn project(view: &View, p: DVec3) -> (f64, f64) {
+    let d = p - view.eye;
+    let z = d.dot(view.forward);
+    (
+        (d.dot(view.right) / z / (view.tan_half * view.aspect) + 1.0) * 0.5 * view.width as f64,
+        (1.0 - d.dot(view.up) / z / view.tan_half) * 0.5 * view.height as f64,
+    )
+}
+
+/// Area of the convex polygon `poly` inside the unit square at `(x0, y0)` (clipping by the
+/// square, then the shoelace formula).
 fn clipped_area(poly: &[(f64, f64)], x0: f64, y0: f64) -> f64 {
-    let mut p = poly.to_vec();
-    // Inside tests of the four edges: x ≥ x0, x ≤ x0 + 1, y ≥ y0, y ≤ y0 + 1.
-    let planes: [(f64, f64, f64); 4] = [
-        (1.0, 0.0, -x0),
-        (-1.0, 0.0, x0 + 1.0),
-        (0.0, 1.0, -y0),
-        (0.0, -1.0, y0 + 1.0),
+    let square = [
+        (x0, y0),
+        (x0 + 1.0, y0),
+        (x0 + 1.0, y0 + 1.0),
+        (x0, y0 + 1.0),
     ];
-    for (a, b, c) in planes {
-        let f = |q: (f64, f64)| a * q.0 + b * q.1 + c;
-        let mut out = Vec::new();
-        for i in 0..p.len() {
-            let (s, e) = (p[i], p[(i + 1) % p.len()]);
-            let (fs, fe) = (f(s), f(e));
-            if fs >= 0.0 {
-                out.push(s);
-            }
-            if (fs >= 0.0) != (fe >= 0.0) {
-                let t = fs / (fs - fe);
-                out.push((s.0 + t * (e.0 - s.0), s.1 + t * (e.1 - s.1)));
-            }
-        }
-        p = out;
-        if p.is_empty() {
-            return 0.0;
-        }
-    }
+    let p = clip_by(poly, &square);
     let mut a = 0.0;
     for i in 0..p.len() {
         let (s, e) = (p[i], p[(i + 1) % p.len()]);
@@ -210,14 +200,7 @@ fn emitter_edges_match_the_box_filtered_coverage() {
     s.solver.iterations = 0;
     s.solver.precision = Precision::F32;
     let view = View::new(&s.camera);
-    let project = |p: DVec3| {
-        let d = p - view.eye;
-        let z = d.dot(view.forward);
-        (
-            (d.dot(view.right) / z / (view.tan_half * view.aspect) + 1.0) * 0.5 * view.width as f64,
-            (1.0 - d.dot(view.up) / z / view.tan_half) * 0.5 * view.height as f64,
-        )
-    };
+    let project = |p: DVec3| project(&view, p);
     let poly: Vec<(f64, f64)> = square.iter().map(|&p| project(p)).collect();
     // The same pixels by the 2×2 samples alone (point in the convex polygon).
     let inside = |q: (f64, f64)| {
@@ -273,8 +256,8 @@ fn emitter_edges_match_the_box_filtered_coverage() {
     }
 }
 
-/// `poly` clipped by the convex polygon `by` (both counter-clockwise in the image's y-down
-/// coordinates as `project` gives them, i.e. the same winding; Sutherland–Hodgman).
+/// `poly` clipped by the convex polygon `by`, of either winding (Sutherland–Hodgman); empty
+/// when less than a triangle is left.
 fn clip_by(poly: &[(f64, f64)], by: &[(f64, f64)]) -> Vec<(f64, f64)> {
     let mut p = poly.to_vec();
     // The side of `by`'s first edge its third corner lies on is its inside.
@@ -352,24 +335,11 @@ fn an_occluder_edge_across_an_emitter_against_the_box_filtered_coverage() {
     s.solver.iterations = 0;
     s.solver.precision = Precision::F32;
     let view = View::new(&s.camera);
-    let project = |p: DVec3| {
-        let d = p - view.eye;
-        let z = d.dot(view.forward);
-        (
-            (d.dot(view.right) / z / (view.tan_half * view.aspect) + 1.0) * 0.5 * view.width as f64,
-            (1.0 - d.dot(view.up) / z / view.tan_half) * 0.5 * view.height as f64,
-        )
-    };
+    let project = |p: DVec3| project(&view, p);
     let e: Vec<(f64, f64)> = emitter.iter().map(|&p| project(p)).collect();
     let o: Vec<(f64, f64)> = occluder.iter().map(|&p| project(p)).collect();
     let hidden = clip_by(&e, &o);
-    let area = |poly: &[(f64, f64)], x: u32, y: u32| {
-        if poly.is_empty() {
-            0.0
-        } else {
-            clipped_area(poly, x as f64, y as f64)
-        }
-    };
+    let area = |poly: &[(f64, f64)], x: u32, y: u32| clipped_area(poly, x as f64, y as f64);
     for backend in [Backend::Cpu, Backend::Gpu] {
         let r = render_checked("occluder edge on an emitter", &s, Options::backend(backend));
         let (mut worst, mut sum, mut crossed, mut worst_elsewhere) = (0f64, 0.0, 0, 0f64);
