@@ -71,15 +71,8 @@ fn plane_under_a_square_emitter_matches_the_closed_form() {
         ],
         lamp,
     );
-    s.camera.eye = DVec3::new(0.0, 2.5, 4.0);
-    s.camera.target = DVec3::ZERO;
-    s.camera.width = 48;
-    s.camera.height = 48;
-    s.camera.fov_y_deg = 60.0;
-    s.solver.bins = 32;
-    s.solver.element_size = 1.0;
-    s.solver.iterations = 0;
-    s.solver.precision = Precision::F32;
+    view(&mut s, DVec3::new(0.0, 2.5, 4.0), DVec3::ZERO, 60.0, 48);
+    direct_light_only(&mut s);
     let view = View::new(&s.camera);
     // The floor point a sample ray reaches, unless the lamp is in the way or it misses the floor.
     let floor_point = |d: DVec3| -> Option<DVec3> {
@@ -132,6 +125,14 @@ fn plane_under_a_square_emitter_matches_the_closed_form() {
         assert!(checked > 1000, "{checked} pixels");
         assert!(worst < 1e-2, "{backend:?}: worst {signed:+.3e}");
     }
+}
+
+/// Direct light and emission only (no iterations), 32 bins, one-unit elements, float32 tables.
+fn direct_light_only(s: &mut Scene) {
+    s.solver.bins = 32;
+    s.solver.element_size = 1.0;
+    s.solver.iterations = 0;
+    s.solver.precision = Precision::F32;
 }
 
 /// Where `p` lands on the image of `view`, in pixels (x right, y down).
@@ -190,15 +191,14 @@ fn emitter_edges_match_the_box_filtered_coverage() {
         corner(-0.5, 0.5),
     ];
     quad(&mut s, "lamp", square, lamp);
-    s.camera.eye = DVec3::new(0.1, 0.05, 3.0);
-    s.camera.target = DVec3::new(0.1, 0.05, 0.0);
-    s.camera.width = 32;
-    s.camera.height = 32;
-    s.camera.fov_y_deg = 30.0;
-    s.solver.bins = 32;
-    s.solver.element_size = 1.0;
-    s.solver.iterations = 0;
-    s.solver.precision = Precision::F32;
+    view(
+        &mut s,
+        DVec3::new(0.1, 0.05, 3.0),
+        DVec3::new(0.1, 0.05, 0.0),
+        30.0,
+        32,
+    );
+    direct_light_only(&mut s);
     let view = View::new(&s.camera);
     let project = |p: DVec3| project(&view, p);
     let poly: Vec<(f64, f64)> = square.iter().map(|&p| project(p)).collect();
@@ -325,15 +325,8 @@ fn an_occluder_edge_across_an_emitter_against_the_box_filtered_coverage() {
         corner(0.0, 1.0),
     ];
     quad(&mut s, "occluder", occluder, black);
-    s.camera.eye = DVec3::new(0.0, 0.0, 3.0);
-    s.camera.target = DVec3::ZERO;
-    s.camera.width = 32;
-    s.camera.height = 32;
-    s.camera.fov_y_deg = 24.0;
-    s.solver.bins = 32;
-    s.solver.element_size = 1.0;
-    s.solver.iterations = 0;
-    s.solver.precision = Precision::F32;
+    view(&mut s, DVec3::new(0.0, 0.0, 3.0), DVec3::ZERO, 24.0, 32);
+    direct_light_only(&mut s);
     let view = View::new(&s.camera);
     let project = |p: DVec3| project(&view, p);
     let e: Vec<(f64, f64)> = emitter.iter().map(|&p| project(p)).collect();
