@@ -93,6 +93,23 @@ fn closed_uniform_box_converges_to_le_over_one_minus_rho() {
     within_4_sigma("2 bounces", m2, le * (1.0 + rho + rho * rho), sigma2, 0.0);
 }
 
+/// The mean of `f` over the floor (y = 0) points that pixel (x, y)'s 8×8 sub-pixel rays reach:
+/// the tracer's box filter, by quadrature.
+fn over_pixel_on_floor(view: &View, x: u32, y: u32, mut f: impl FnMut(DVec3) -> f64) -> f64 {
+    let k = 8;
+    let mut sum = 0.0;
+    for j in 0..k {
+        for i in 0..k {
+            let d = view.ray(
+                x as f64 + (i as f64 + 0.5) / k as f64,
+                y as f64 + (j as f64 + 0.5) / k as f64,
+            );
+            sum += f(view.eye + d * (-view.eye.y / d.y));
+        }
+    }
+    sum / (k * k) as f64
+}
+
 /// A lone diffuse plane under one point light: L = kd/π · I cos θ / r² at every pixel.
 #[test]
 fn plane_under_a_point_light_matches_the_analytic_radiance() {
@@ -118,21 +135,10 @@ fn plane_under_a_point_light_matches_the_analytic_radiance() {
     for y in 0..40 {
         for x in 0..40 {
             // Average the analytic radiance over the pixel (the tracer's box filter).
-            let k = 8;
-            let mut want = 0.0;
-            for j in 0..k {
-                for i2 in 0..k {
-                    let d = view.ray(
-                        x as f64 + (i2 as f64 + 0.5) / k as f64,
-                        y as f64 + (j as f64 + 0.5) / k as f64,
-                    );
-                    let t = -view.eye.y / d.y;
-                    let p = view.eye + d * t;
-                    let v = pos - p;
-                    want += kd / PI * i * (v.y / v.length()) / v.length_squared();
-                }
-            }
-            want /= (k * k) as f64;
+            let want = over_pixel_on_floor(&view, x, y, |p| {
+                let v = pos - p;
+                kd / PI * i * (v.y / v.length()) / v.length_squared()
+            });
             // The only noise is where in the pixel each sample lands: allow 4 standard errors.
             let got = lum(r.image.at(x, y));
             let sigma = lum(r.std_error.as_ref().unwrap().at(x, y));
@@ -361,21 +367,11 @@ fn floor_under_an_occluded_square_emitter_matches_the_closed_form() {
     let (mut sum_got, mut sum_want) = (0.0, 0.0);
     for y in 0..n {
         for x in 0..n {
-            // The pixel's box filter, by 8×8 quadrature.
-            let k = 8;
-            let mut want = 0.0;
-            for j in 0..k {
-                for i in 0..k {
-                    let d = view.ray(
-                        x as f64 + (i as f64 + 0.5) / k as f64,
-                        y as f64 + (j as f64 + 0.5) / k as f64,
-                    );
-                    let p = view.eye + d * (-view.eye.y / d.y);
-                    want += kd * visible(p);
-                    min_frac = min_frac.min(visible(p) / rect_factor(p, ex, ez, h));
-                }
-            }
-            want /= (k * k) as f64;
+            // The pixel's box filter.
+            let want = over_pixel_on_floor(&view, x, y, |p| {
+                min_frac = min_frac.min(visible(p) / rect_factor(p, ex, ez, h));
+                kd * visible(p)
+            });
             let got = lum(r.image.at(x, y));
             let sigma = lum(r.std_error.as_ref().unwrap().at(x, y));
             worst = worst.max((got - want).abs() / (4.0 * sigma + 0.003 * want));
