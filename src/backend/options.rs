@@ -83,6 +83,8 @@ pub struct Options {
     pub width: Option<u32>,
     /// Image height replacing the camera's.
     pub height: Option<u32>,
+    /// Supersampling replacing the camera's ([`crate::scene::Camera::supersample`]).
+    pub supersample: Option<u32>,
     /// Side of each shadow map (texels).
     pub shadow_map_size: u32,
     /// Device to render on (GPU backend; a host's device when embedding); `None` creates a
@@ -120,6 +122,7 @@ impl Default for Options {
             solver: SolverOverrides::default(),
             width: None,
             height: None,
+            supersample: None,
             shadow_map_size: 1024,
             context: None,
             device: None,
@@ -266,6 +269,24 @@ impl Options {
         let mut camera = scene.camera.clone();
         camera.width = self.width.unwrap_or(camera.width);
         camera.height = self.height.unwrap_or(camera.height);
+        camera.supersample = self.supersample.unwrap_or(camera.supersample);
+        let k = camera.supersample;
+        let max = crate::scene::MAX_SUPERSAMPLE;
+        if !(1..=max).contains(&k) {
+            return Err(Error::Invalid(format!(
+                "--supersample must be in 1..={max}, got {k}"
+            )));
+        }
+        // The frame is drawn at k× the image and reduced by the engine when read back.
+        let (w, h) = (camera.width as u64 * k as u64, camera.height as u64 * k as u64);
+        if w.max(h) > 16384 {
+            return Err(Error::Invalid(format!(
+                "the image {}×{} supersampled {k}× is {w}×{h} frame pixels, more than 16384 on a side",
+                camera.width, camera.height
+            )));
+        }
+        camera.width = w as u32;
+        camera.height = h as u32;
         Ok(Resolved {
             settings,
             camera,

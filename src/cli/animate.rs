@@ -35,6 +35,11 @@ pub struct AnimateArgs {
     pub solver: SolverArgs,
     #[command(flatten)]
     pub size: SizeArgs,
+    /// Override `camera.supersample`: each pixel the box-filtered mean of K×K frame pixels
+    /// (the frame drawn at K× the size; anti-aliases sub-pixel edges and shadows, K² the
+    /// frame's cost), 1..=8.
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=antiradiance::scene::MAX_SUPERSAMPLE as i64))]
+    pub supersample: Option<u32>,
     /// PNG exposure in stops.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite)]
     pub exposure: f64,
@@ -67,6 +72,7 @@ fn run(scene: &Scene, a: AnimateArgs, name: &str) -> Result<()> {
         solver,
         width: a.size.width,
         height: a.size.height,
+        supersample: a.supersample,
         backend: a.backend,
         shadow_map_size: a.shadow_map_size,
         device: a.device,

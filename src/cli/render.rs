@@ -42,6 +42,11 @@ pub struct RenderArgs {
     pub max_iterations: Option<usize>,
     #[command(flatten)]
     pub size: SizeArgs,
+    /// Override `camera.supersample`: each pixel the box-filtered mean of K×K frame pixels
+    /// (the frame drawn at K× the size; anti-aliases sub-pixel edges and shadows, K² the
+    /// frame's cost), 1..=8.
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=antiradiance::scene::MAX_SUPERSAMPLE as i64))]
+    pub supersample: Option<u32>,
     /// PNG exposure in stops (pixel values are multiplied by 2^exposure).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite)]
     pub exposure: f64,
@@ -91,6 +96,7 @@ impl RenderArgs {
         o.solver.max_iterations = self.max_iterations;
         o.width = self.size.width;
         o.height = self.size.height;
+        o.supersample = self.supersample;
         o.backend = self.backend;
         o.method = self.method;
         o.baseline = self.baseline.settings();

@@ -39,7 +39,8 @@ impl Engine {
     }
 
     /// The output image the last [`Engine::record_draw`] writes (valid until an update makes
-    /// the backend anew: read it again after every [`Engine::record_update`]).
+    /// the backend anew: read it again after every [`Engine::record_update`]). It is the frame
+    /// before reduction: `camera.supersample` × the image's size (a host samples or blits it).
     pub fn output_image(&mut self) -> Result<OutputImage> {
         let out = &self
             .gpu_backend("the output image")?

@@ -247,20 +247,25 @@ impl Engine {
 
     /// Draws the current state from the camera into host memory.
     pub fn draw(&mut self) -> Result<Image> {
-        self.backend.draw(&self.prep)
+        let k = self.prep.camera.supersample;
+        Ok(self.backend.draw(&self.prep)?.box_reduced(k))
     }
 
     /// Draws the next frames from `camera` (a pose, target or field of view; the image size
     /// is fixed when the engine is made). The solution is view-independent: nothing is
     /// re-solved, the next [`Engine::draw`] / [`Engine::record_draw`] uses the camera.
-    pub fn set_camera(&mut self, camera: Camera) -> Result<()> {
+    /// The camera's `supersample` is the engine's (fixed with the size).
+    pub fn set_camera(&mut self, mut camera: Camera) -> Result<()> {
         let old = &self.prep.camera;
-        if (camera.width, camera.height) != (old.width, old.height) {
+        let k = old.supersample;
+        let (w, h) = (old.width / k, old.height / k);
+        if (camera.width, camera.height) != (w, h) {
             return Err(Error::Invalid(format!(
-                "camera: the image is {}×{} pixels; set_camera must keep that size (got {}×{})",
-                old.width, old.height, camera.width, camera.height
+                "camera: the image is {w}×{h} pixels; set_camera must keep that size (got {}×{})",
+                camera.width, camera.height
             )));
         }
+        (camera.width, camera.height, camera.supersample) = (w * k, h * k, k);
         let forward = camera.target - camera.eye;
         let finite = [camera.eye, camera.target, camera.up]
             .iter()
@@ -380,7 +385,7 @@ impl Engine {
         };
         let mut on_frame = |k: usize, backend: &mut dyn Backend| -> Result<()> {
             let t = Instant::now();
-            let image = backend.draw(prep)?;
+            let image = backend.draw(prep)?.box_reduced(prep.camera.supersample);
             if !image.is_finite() {
                 return Err(Error::Numerical(format!(
                     "the frame after iteration {k} has non-finite pixels"
@@ -424,8 +429,8 @@ impl Engine {
             iterations: outcome.residuals.len(),
             scheme: outcome.scheme.unwrap_or(prep.settings.scheme),
             precision: self.backend.precision(),
-            width: prep.camera.width,
-            height: prep.camera.height,
+            width: prep.camera.width / prep.camera.supersample,
+            height: prep.camera.height / prep.camera.supersample,
             passes: prep.plan.passes(),
             decisions: prep.plan.decisions.clone(),
             all_passes: prep.plan.all_passes,

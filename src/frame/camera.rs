@@ -97,6 +97,7 @@ mod tests {
             fov_y_deg: 40.0,
             width: 64,
             height: 48,
+            supersample: 1,
         };
         let v = View::new(&cam);
         let m = v.view_proj(0.01, 100.0);

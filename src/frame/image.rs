@@ -146,6 +146,37 @@ pub fn srgb_encode(v: f32) -> f32 {
 }
 
 impl Image {
+    /// Each k×k block of pixels replaced by its mean (a supersampled frame reduced to the
+    /// image: the box filter over the pixel the path tracer integrates). `k` divides both sides.
+    pub fn box_reduced(self, k: u32) -> Image {
+        if k <= 1 {
+            return self;
+        }
+        let (w, h) = (self.width / k, self.height / k);
+        debug_assert_eq!((w * k, h * k), (self.width, self.height));
+        let mut pixels = vec![[0.0f32; 3]; (w * h) as usize];
+        let scale = 1.0 / (k * k) as f64;
+        for y in 0..h {
+            for x in 0..w {
+                let mut sum = [0.0f64; 3];
+                for dy in 0..k {
+                    for dx in 0..k {
+                        let p = self.at(x * k + dx, y * k + dy);
+                        for c in 0..3 {
+                            sum[c] += p[c] as f64;
+                        }
+                    }
+                }
+                pixels[(y * w + x) as usize] = sum.map(|v| (v * scale) as f32);
+            }
+        }
+        Image {
+            width: w,
+            height: h,
+            pixels,
+        }
+    }
+
     /// Pixel (x, y).
     pub fn at(&self, x: u32, y: u32) -> [f32; 3] {
         self.pixels[(y * self.width + x) as usize]
@@ -298,6 +329,18 @@ mod tests {
             height: 2,
             pixels: vec![[v, 0.5, 0.25]; 6],
         }
+    }
+
+    #[test]
+    fn box_reduction_averages_each_block() {
+        let pixels = (0..24).map(|i| [i as f32, 1.0, -(i as f32)]).collect();
+        let big = Image { width: 6, height: 4, pixels };
+        let small = big.clone().box_reduced(2);
+        assert_eq!((small.width, small.height), (3, 2));
+        // Block (1, 1) holds pixels 14, 15, 20, 21 of the 6-wide image.
+        assert_eq!(small.at(1, 1), [17.5, 1.0, -17.5]);
+        assert_eq!(small.at(0, 0), [3.5, 1.0, -3.5]);
+        assert_eq!(big.clone().box_reduced(1).pixels, big.pixels);
     }
 
     #[test]

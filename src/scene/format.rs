@@ -277,6 +277,8 @@ pub struct CameraDesc {
     pub width: Option<i64>,
     /// Image height in pixels, 1..=16384 (default 512).
     pub height: Option<i64>,
+    /// Frame pixels per image pixel along each axis, box-filtered, 1..=8 (default 1).
+    pub supersample: Option<i64>,
 }
 
 /// `[solver]`; [`super::SolverSettings`] has the defaults and the ranges.

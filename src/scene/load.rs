@@ -196,6 +196,7 @@ pub(super) fn framing(scene: &Scene) -> Camera {
         fov_y_deg: fov,
         width: 512,
         height: 512,
+        supersample: 1,
     }
 }
 
@@ -299,6 +300,19 @@ fn camera(c: &format::CameraDesc, path: &Path) -> Result<Camera> {
         fov_y_deg: fov,
         width: dim(c.width, "camera.width")?,
         height: dim(c.height, "camera.height")?,
+        supersample: match c.supersample {
+            None => 1,
+            Some(k) if (1..=super::MAX_SUPERSAMPLE as i64).contains(&k) => k as u32,
+            Some(k) => {
+                return Err(scene_err(
+                    path,
+                    format!(
+                        "`camera.supersample` must be in 1..={}, got {k}",
+                        super::MAX_SUPERSAMPLE
+                    ),
+                ))
+            }
+        },
     })
 }
 

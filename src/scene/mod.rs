@@ -169,7 +169,14 @@ pub struct Camera {
     pub width: u32,
     /// Height in pixels.
     pub height: u32,
+    /// Each pixel is the box-filtered mean of `supersample`² frame pixels (of 2×2 samples
+    /// each): 1..=[`MAX_SUPERSAMPLE`], default 1. The frame is drawn at `supersample` × the
+    /// size and reduced when read back; the solve does not depend on it.
+    pub supersample: u32,
 }
+
+/// Largest [`Camera::supersample`].
+pub const MAX_SUPERSAMPLE: u32 = 8;
 
 /// Solver settings (`[solver]`). The ranges below are checked when a scene file is loaded.
 #[derive(Debug, Clone, PartialEq)]
@@ -348,6 +355,7 @@ impl Scene {
                 fov_y_deg: 40.0,
                 width: 512,
                 height: 512,
+                supersample: 1,
             },
             solver: SolverSettings::default(),
             warnings: Vec::new(),

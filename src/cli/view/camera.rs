@@ -149,6 +149,7 @@ mod tests {
             fov_y_deg: 40.0,
             width: 64,
             height: 64,
+            supersample: 1,
         }
     }
 

@@ -357,6 +357,7 @@ impl State<'_> {
             fov_y_deg: fov,
             width,
             height,
+            supersample: 1,
         });
     }
 

@@ -188,6 +188,7 @@ impl<'a, 'i> Reader<'a, 'i> {
             fov_y_deg: fov_y,
             width: width as u32,
             height: height as u32,
+            supersample: 1,
         }))
     }
 }
