@@ -9,7 +9,8 @@ docs/results.md.in with them, and lists them in docs/measurements.md.
 
 tests/readme.rs fails when the README's table is not docs/results.md.in printed from
 docs/measurements.json, or quotes a figure the file lacks; `record` fails when a test measures
-a figure away from the file's value."""
+a figure away from the file's value. Figures not measured this run keep their value and the
+commit that measured them (`--fresh` drops them instead)."""
 import json, os, pathlib, re, subprocess, sys
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
@@ -62,12 +63,17 @@ def main():
     found = sorted((target / "measurements").glob("*.json"))
     if not found:
         sys.exit(f"no figures in {target / 'measurements'}: run the suite first")
-    figures = {}
-    for f in found:
-        d = json.loads(f.read_text())
-        figures[d["key"]] = {"value": d["value"], "test": d["test"]}
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT,
                             capture_output=True, text=True).stdout.strip()
+    old_path = ROOT / "docs/measurements.json"
+    figures = {}
+    if "--fresh" not in sys.argv and old_path.exists():
+        old = json.loads(old_path.read_text())
+        for k, v in old["figures"].items():
+            figures[k] = {**v, "commit": v.get("commit", old["commit"])}
+    for f in found:
+        d = json.loads(f.read_text())
+        figures[d["key"]] = {"value": d["value"], "test": d["test"], "commit": commit}
     cpu = next((l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo") if l.startswith("model name")), "?")
     machine = f"{cpu}, {os.cpu_count()} cores, lavapipe"
     out = {"commit": commit, "machine": machine, "figures": dict(sorted(figures.items()))}
@@ -75,10 +81,10 @@ def main():
     readme = (ROOT / "README.md").read_text()
     table = render((ROOT / "docs/results.md.in").read_text(), figures)
     (ROOT / "README.md").write_text(replace_between(readme, BEGIN, END, table))
-    rows = [f"Measured by the test suite at commit {commit} on {machine} "
+    rows = [f"Measured by the test suite on {machine}, each at the commit beside it "
             "(`ANTIRADIANCE_RECORD_FIGURES=1 cargo test --release`, then `python3 scripts/measurements.py`); "
-            "each test holds its figure to this file.", "", "| figure | value | test binary |", "|---|---|---|"]
-    rows += [f"| `{k}` | {v['value']:.6g} | `{v['test']}` |" for k, v in sorted(figures.items())]
+            "each test holds its figure to this file.", "", "| figure | value | test binary | commit |", "|---|---|---|---|"]
+    rows += [f"| `{k}` | {v['value']:.6g} | `{v['test']}` | {v['commit']} |" for k, v in sorted(figures.items())]
     md = (ROOT / "docs/measurements.md").read_text()
     (ROOT / "docs/measurements.md").write_text(replace_between(md, LIST_BEGIN, LIST_END, "\n".join(rows)))
     print(f"{len(figures)} figures from {commit} on {machine}")
