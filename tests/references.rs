@@ -454,16 +454,16 @@ fn dragon_room_at_low_resolution() {
 }
 
 /// The bundled breakfast room (issue 35: 269,538 triangles as converted from its Mitsuba file,
-/// fitted to the link budget at τ 16) lit by its sun and its sky, 32×18: the sunlit stripes
-/// through the blinds, the sky through the windows (shadowed by rays,
-/// `frame::environment`) and the light they bounce. Measured: relative RMSE 0.559 on both
-/// backends (the reference's noise 0.106; most of the rest the stripes' edges, which the raster
-/// shadow maps and the path tracer's rays cut differently at this size), mean −4.0%, indirect
-/// light 0.564, the 76 indirect-only pixels 36% / 34% off at the median; GPU vs CPU 8.8e-2, of
-/// it one pixel that sees the sky between two slats in one frame and not in the other (−75%).
-/// With the sky carried unoccluded into the room and cancelled by antiradiance, as before, the
-/// frame was 1.9× too bright. Bounds 1.3–1.5× the measured (the stripes move with any change
-/// of the shadow maps).
+/// fitted to the link budget at τ 16) lit by its sun and its sky, 32×18 drawn at 4× and
+/// box-filtered (`camera.supersample`, the path tracer's pixel): the sunlit stripes through the
+/// blinds, the sky through the windows (shadowed by rays, `frame::environment`) and the light
+/// they bounce. Measured: relative RMSE 0.137 on both backends (the reference's noise 0.030 at
+/// 8192 spp), mean −2.5%, indirect light 0.448, the 54 indirect-only pixels 32% off at the
+/// median; GPU vs CPU 2.6e-2. Without the supersampling it was 0.56: at 32×18 a frame pixel's
+/// 2×2 samples alias the stripes' edges, which the path tracer integrates over the pixel
+/// (measured 0.56 / 0.22 / 0.14 at 1× / 2× / 4×). The issue's target 0.20 is the bound; the
+/// indirect bounds are 1.3× the measured. With the sky carried unoccluded into the room and
+/// cancelled by antiradiance, as before, the frame was 1.9× too bright.
 #[test]
 fn breakfast_room_at_low_resolution() {
     let mut s =
@@ -471,13 +471,15 @@ fn breakfast_room_at_low_resolution() {
             .unwrap();
     s.camera.width = 32;
     s.camera.height = 18;
-    let truth = path_traced(&s, 1024);
+    s.camera.supersample = 4;
+    let truth = path_traced(&s, 8192);
     let bounds = Bounds {
-        rel_rmse: 0.75,
-        mean_bias: 0.06,
-        indirect_rmse: 0.75,
-        indirect_median: Some(0.5),
-        gpu_vs_cpu: 0.13,
+        rel_rmse: 0.20,
+        mean_bias: 0.05,
+        indirect_rmse: 0.6,
+        indirect_median: Some(0.4),
+        gpu_vs_cpu: 6e-2,
+        // Not measured here (lavapipe accumulates in float32); 8.8e-2 at 1× on float16 tables.
         gpu_vs_cpu_f16: 0.13,
     };
     check("breakfast room", "breakfast", &s, &truth, &bounds);
