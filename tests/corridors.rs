@@ -1,0 +1,292 @@
+//! Light through many occluders (issue 36): open-topped corridors of 1 to 4 turns with walls of
+//! zero and of real thickness, lit by a sun from above or by an area emitter at one end, and a
+//! stack of plates with offset openings under a sun, each against the project's path tracer.
+//!
+//! The frames are supersampled 4× (each pixel the mean of 8×8 samples, as the path tracer's
+//! pixel integrates its box): at 32² a pixel holds a wall's whole top and its shadow edge, and
+//! the plain 2×2 samples alias them. Measured on the first corridor before this test: 0.32
+//! relative RMSE at supersample 1, 0.075 at 4, 0.066 at 8 (the reference's noise 0.052 of it),
+//! and hierarchical radiosity with ray-cast visibility on the same links 0.32 / 0.074 / 0.064:
+//! what was off there was the frame's sampling, not antiradiance's cancellation.
+
+mod common;
+
+use antiradiance::engine::{Options, SolverOverrides};
+use antiradiance::frame::Image;
+use antiradiance::scene::{Light, Material, Scene};
+use antiradiance::BackendKind as Backend;
+use common::*;
+use glam::DVec3;
+
+const W: f64 = 0.5; // lane width
+const L: f64 = 2.0; // lane length
+const H: f64 = 0.5; // wall height
+const T: f64 = 0.06; // a thick wall's thickness
+
+#[derive(Clone, Copy, PartialEq, Debug)]
+enum Walls {
+    Thin,
+    Thick,
+}
+
+#[derive(Clone, Copy, PartialEq, Debug)]
+enum Lit {
+    Sun,
+    Emitter,
+}
+
+/// A wall standing on the floor from (x0, z0) to (x1, z1), `h` high (from `y0`): a two-sided
+/// quad (zero thickness), or a box `T` thick.
+#[allow(clippy::too_many_arguments)]
+fn wall(s: &mut Scene, name: &str, a: (f64, f64), b: (f64, f64), y0: f64, h: f64, walls: Walls, m: u32) {
+    let p = DVec3::new;
+    match walls {
+        Walls::Thin => {
+            let q = [p(a.0, y0, a.1), p(b.0, y0, b.1), p(b.0, y0 + h, b.1), p(a.0, y0 + h, a.1)];
+            quad(s, name, q, m);
+            let mut r = q;
+            r.reverse();
+            quad(s, &format!("{name} back"), r, m);
+        }
+        Walls::Thick => {
+            let (lo, hi) = (p(a.0.min(b.0), y0, a.1.min(b.1)), p(a.0.max(b.0), y0 + h, a.1.max(b.1)));
+            let pad = |v: f64, w: f64| if v == w { T / 2.0 } else { 0.0 };
+            let (dx, dz) = (pad(lo.x, hi.x), pad(lo.z, hi.z));
+            add_box(s, name, lo - p(dx, 0.0, dz), hi + p(dx, 0.0, dz), m, false);
+        }
+    }
+}
+
+/// A serpentine corridor of `turns` turns: `turns + 1` lanes side by side along z, each joined
+/// to the next through a gap at alternate ends, open at the top. Lit by a sun slanted across
+/// the lanes (their floors partly in the walls' shadows), or by an emitter on the far end wall
+/// of the first lane, whose light reaches lane k only after k turns.
+fn serpentine(turns: usize, walls: Walls, lit: Lit) -> Scene {
+    let mut s = Scene::empty();
+    let f = s.add_material(Material::diffuse("floor", 0.6));
+    let w = s.add_material(Material::diffuse("wall", 0.7));
+    let lanes = turns + 1;
+    let x = lanes as f64 * W;
+    let p = DVec3::new;
+    quad(&mut s, "floor", [p(0.0, 0.0, 0.0), p(0.0, 0.0, L), p(x, 0.0, L), p(x, 0.0, 0.0)], f);
+    wall(&mut s, "left", (0.0, 0.0), (0.0, L), 0.0, H, walls, w);
+    wall(&mut s, "right", (x, 0.0), (x, L), 0.0, H, walls, w);
+    wall(&mut s, "near", (0.0, L), (x, L), 0.0, H, walls, w);
+    wall(&mut s, "far", (0.0, 0.0), (x, 0.0), 0.0, H, walls, w);
+    for i in 1..lanes {
+        let xi = i as f64 * W;
+        // Lane 0 runs from the emitter at z = L to z = 0, lane 1 back, and so on.
+        let (z0, z1) = if i % 2 == 1 { (W, L) } else { (0.0, L - W) };
+        wall(&mut s, &format!("inner{i}"), (xi, z0), (xi, z1), 0.0, H, walls, w);
+    }
+    match lit {
+        Lit::Sun => {
+            s.lights = vec![Light::Directional {
+                direction: DVec3::new(0.45, -1.0, 0.3).normalize(),
+                irradiance: DVec3::splat(3.0),
+            }];
+        }
+        Lit::Emitter => {
+            let e = s.add_material(Material {
+                ke: DVec3::splat(8.0),
+                ..Material::diffuse("lamp", 0.0)
+            });
+            let inset = if walls == Walls::Thick { T / 2.0 } else { 0.0 };
+            let z = L - inset - 1e-3;
+            let (x0, x1) = (0.15 * W, 0.85 * W);
+            // Facing −z, into the first lane.
+            quad(&mut s, "lamp", [p(x0, 0.05, z), p(x0, H - 0.05, z), p(x1, H - 0.05, z), p(x1, 0.05, z)], e);
+        }
+    }
+    default_solver(&mut s, 8);
+    let c = p(x / 2.0, 0.0, L / 2.0);
+    let ext = x.max(L);
+    view(&mut s, c + p(0.0, 1.6 * ext, 0.9 * ext), c, 40.0, 32);
+    s
+}
+
+/// Three plates stacked above a floor inside three walls (open at the top and the front), each
+/// with an opening at the other end from the one above; a sun from above lights the top plate
+/// and, through the openings, one patch on each layer: the floor is reached through three.
+fn stack(walls: Walls) -> Scene {
+    let mut s = Scene::empty();
+    let g = s.add_material(Material::diffuse("grey", 0.7));
+    let p = DVec3::new;
+    let (x, z, top) = (2.0, 1.0, 1.5);
+    quad(&mut s, "floor", [p(0.0, 0.0, 0.0), p(0.0, 0.0, z), p(x, 0.0, z), p(x, 0.0, 0.0)], g);
+    // Walls as vertical plates: back (z = 0) and the two sides.
+    wall(&mut s, "back", (0.0, 0.0), (x, 0.0), 0.0, top, walls, g);
+    wall(&mut s, "left", (0.0, 0.0), (0.0, z), 0.0, top, walls, g);
+    wall(&mut s, "right", (x, 0.0), (x, z), 0.0, top, walls, g);
+    for (k, y) in [top, 1.0, 0.5].into_iter().enumerate() {
+        // The opening: 0.4 wide, at the right end for plates 0 and 2, the left for plate 1.
+        let (a, b) = if k % 2 == 0 { (1.5, 1.9) } else { (0.1, 0.5) };
+        for (n, (x0, x1)) in [(0.0, a), (b, x)].into_iter().enumerate() {
+            let name = format!("plate{k}.{n}");
+            match walls {
+                Walls::Thin => {
+                    let q = [p(x0, y, 0.0), p(x0, y, z), p(x1, y, z), p(x1, y, 0.0)];
+                    quad(&mut s, &name, q, g);
+                    let mut r = q;
+                    r.reverse();
+                    quad(&mut s, &format!("{name} back"), r, g);
+                }
+                Walls::Thick => add_box(&mut s, &name, p(x0, y - T, 0.0), p(x1, y, z), g, false),
+            }
+        }
+    }
+    s.lights = vec![Light::Directional {
+        direction: DVec3::new(0.1, -1.0, -0.2).normalize(),
+        irradiance: DVec3::splat(3.0),
+    }];
+    default_solver(&mut s, 8);
+    view(&mut s, p(1.0, 0.9, 3.4), p(1.0, 0.75, 0.4), 40.0, 32);
+    s
+}
+
+/// Relative RMSE of `direct` against the reference's direct light (its one-bounce paths), over
+/// the measured pixels.
+fn direct_error(direct: &Image, one_bounce: &Image, measured: &[bool]) -> f64 {
+    let (mut sq, mut sum, mut n) = (0.0, 0.0, 0usize);
+    for i in 0..measured.len() {
+        if measured[i] {
+            for c in 0..3 {
+                let (a, b) = (direct.pixels[i][c] as f64, one_bounce.pixels[i][c] as f64);
+                sq += (a - b).powi(2);
+                sum += b;
+                n += 1;
+            }
+        }
+    }
+    (sq / n as f64).sqrt() / (sum / n as f64).max(1e-12)
+}
+
+struct Bound {
+    rel_rmse: f64,
+    median: f64,
+    p90: f64,
+    direct: f64,
+}
+
+/// Renders `scene` on both backends (the GPU only where `gpu`) supersampled 4×, against the
+/// path tracer: prints the figures, records the CPU's, checks `bound`.
+fn check(key: &str, scene: &Scene, gpu: bool, bound: &Bound) {
+    let truth = path_traced(scene, 2048);
+    let options = |backend, iterations| Options {
+        supersample: Some(4),
+        solver: SolverOverrides {
+            iterations,
+            ..Default::default()
+        },
+        ..Options::backend(backend)
+    };
+    let backends: &[Backend] = if gpu { &[Backend::Cpu, Backend::Gpu] } else { &[Backend::Cpu] };
+    for &b in backends {
+        let r = render_checked(key, scene, options(b, None));
+        let d = render_checked(key, scene, options(b, Some(0))).image;
+        let m = measure(&r.image, &d, &truth);
+        let de = direct_error(&d, &truth.reference.direct, &truth.measured);
+        println!("corridors {key} {b}: {m}; direct light against the one-bounce image {de:.4}");
+        if b == Backend::Cpu {
+            record(&format!("corridors.{key}.rmse"), m.rel_rmse, 0.02);
+            record(&format!("corridors.{key}.median"), m.indirect_median, 0.02);
+            record(&format!("corridors.{key}.p90"), m.indirect_p90, 0.02);
+            record(&format!("corridors.{key}.direct"), de, 0.02);
+        }
+        assert!(m.rel_rmse < bound.rel_rmse, "{key} {b}: relative RMSE {:.4} ≥ {}", m.rel_rmse, bound.rel_rmse);
+        assert!(m.indirect_median < bound.median, "{key} {b}: median {:.4} ≥ {}", m.indirect_median, bound.median);
+        assert!(m.indirect_p90 < bound.p90, "{key} {b}: 90th percentile {:.4} ≥ {}", m.indirect_p90, bound.p90);
+        assert!(de < bound.direct, "{key} {b}: direct light {de:.4} ≥ {}", bound.direct);
+    }
+}
+
+// Bounds 1.5× the worst of each family as measured (CPU and GPU alike; the figures of every
+// scene are in docs/measurements.json, held within 2% by `record`). They are far from issue
+// 36's targets (relative RMSE 0.15, median 10%, 90th percentile 30%, direct light 2%), which
+// only the thick walls under the sun meet in part: they hold what the method does today.
+
+/// Zero-thickness walls under the sun: relative RMSE 0.137 / 0.125 / 0.154 / 0.234 at 1–4
+/// turns, 6–11% too dark, the indirect-only pixels 20 / 17 / 33 / 32% off at the median; the
+/// direct light 0.03–0.04 from the reference's (the GPU's 0.076 on the 2-turn corridor).
+const THIN_SUN: Bound = Bound {
+    rel_rmse: 0.35,
+    median: 0.5,
+    p90: 1.3,
+    direct: 0.12,
+};
+
+/// Walls 0.06 thick under the sun: 0.094 / 0.049 / 0.043 / 0.081, medians 4–8%, p90 11–26%,
+/// direct light 0.05–0.07.
+const THICK_SUN: Bound = Bound {
+    rel_rmse: 0.14,
+    median: 0.125,
+    p90: 0.4,
+    direct: 0.11,
+};
+
+/// Lit by the emitter at one end, zero-thickness walls: 0.21 / 0.14 / 0.17 / 0.24. The
+/// indirect-only pixels lie in the lanes after a turn, whose light in the reference is a few
+/// thousandths of the first lane's: about half of them are exactly zero in the frame (which
+/// clamps a negative sum of light and antiradiance to zero: median 100%) and others get light
+/// the reference does not have (90th percentile up to 327×). The emitter's direct light is
+/// 11% from the reference's; not yet diagnosed.
+const THIN_LAMP: Bound = Bound {
+    rel_rmse: 0.36,
+    median: 1.5,
+    p90: 500.0,
+    direct: 0.18,
+};
+
+/// As [`THIN_LAMP`] with thick walls: 0.33 / 0.24 / 0.21 / 0.25, p90 up to 24×, direct 25–36%.
+const THICK_LAMP: Bound = Bound {
+    rel_rmse: 0.5,
+    median: 1.5,
+    p90: 37.0,
+    direct: 0.54,
+};
+
+/// The plates: thin 0.286 (median 36%, p90 102%, direct 0.28), thick 0.166 (15%, 50%, 0.23).
+const STACK: Bound = Bound {
+    rel_rmse: 0.43,
+    median: 0.55,
+    p90: 1.55,
+    direct: 0.44,
+};
+
+#[test]
+fn thin_walls_under_the_sun() {
+    for turns in 1..=4 {
+        let s = serpentine(turns, Walls::Thin, Lit::Sun);
+        check(&format!("thin-sun-{turns}"), &s, turns == 2, &THIN_SUN);
+    }
+}
+
+#[test]
+fn thick_walls_under_the_sun() {
+    for turns in 1..=4 {
+        let s = serpentine(turns, Walls::Thick, Lit::Sun);
+        check(&format!("thick-sun-{turns}"), &s, false, &THICK_SUN);
+    }
+}
+
+#[test]
+fn thin_walls_lit_from_one_end() {
+    for turns in 1..=4 {
+        let s = serpentine(turns, Walls::Thin, Lit::Emitter);
+        check(&format!("thin-lamp-{turns}"), &s, false, &THIN_LAMP);
+    }
+}
+
+#[test]
+fn thick_walls_lit_from_one_end() {
+    for turns in 1..=4 {
+        let s = serpentine(turns, Walls::Thick, Lit::Emitter);
+        check(&format!("thick-lamp-{turns}"), &s, turns == 3, &THICK_LAMP);
+    }
+}
+
+#[test]
+fn a_stack_of_plates_with_offset_openings() {
+    check("stack-thin", &stack(Walls::Thin), false, &STACK);
+    check("stack-thick", &stack(Walls::Thick), true, &STACK);
+}
