@@ -167,15 +167,16 @@ fn back_to_back(tris: &[[DVec3; 3]], eps: f64) -> Vec<bool> {
                 // A large flat tessellation backed face by face has exact twins; past
                 // MAX_BUCKET faces in one plane the search stops (the face keeps blocking).
                 buckets.get(&(kn, kd)).is_some_and(|list| {
-                    list.len() <= MAX_BUCKET && list.iter().any(|&o| {
-                        let q = &tris[o];
-                        // The centroid inside the other triangle (edge tests in its plane).
-                        let m = (q[1] - q[0]).cross(q[2] - q[0]);
-                        (0..3).all(|i| {
-                            let (a, b) = (q[i], q[(i + 1) % 3]);
-                            (b - a).cross(centroid - a).dot(m) >= 0.0
+                    list.len() <= MAX_BUCKET
+                        && list.iter().any(|&o| {
+                            let q = &tris[o];
+                            // The centroid inside the other triangle (edge tests in its plane).
+                            let m = (q[1] - q[0]).cross(q[2] - q[0]);
+                            (0..3).all(|i| {
+                                let (a, b) = (q[i], q[(i + 1) % 3]);
+                                (b - a).cross(centroid - a).dot(m) >= 0.0
+                            })
                         })
-                    })
                 })
             })
         })
@@ -324,7 +325,10 @@ mod tests {
         s.camera.eye = DVec3::splat(-20.0);
         let solid = solid_triangles(&s);
         assert!(solid[0].iter().chain(&solid[1]).all(|&b| b), "{solid:?}");
-        assert!(solid[2].iter().all(|&b| !b), "a lone quad blocks from behind");
+        assert!(
+            solid[2].iter().all(|&b| !b),
+            "a lone quad blocks from behind"
+        );
         assert!(solid[3].iter().chain(&solid[4]).all(|&b| b), "{solid:?}");
     }
 }

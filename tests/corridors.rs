@@ -38,18 +38,35 @@ enum Lit {
 /// A wall standing on the floor from (x0, z0) to (x1, z1), `h` high (from `y0`): a two-sided
 /// quad (zero thickness), or a box `T` thick.
 #[allow(clippy::too_many_arguments)]
-fn wall(s: &mut Scene, name: &str, a: (f64, f64), b: (f64, f64), y0: f64, h: f64, walls: Walls, m: u32) {
+fn wall(
+    s: &mut Scene,
+    name: &str,
+    a: (f64, f64),
+    b: (f64, f64),
+    y0: f64,
+    h: f64,
+    walls: Walls,
+    m: u32,
+) {
     let p = DVec3::new;
     match walls {
         Walls::Thin => {
-            let q = [p(a.0, y0, a.1), p(b.0, y0, b.1), p(b.0, y0 + h, b.1), p(a.0, y0 + h, a.1)];
+            let q = [
+                p(a.0, y0, a.1),
+                p(b.0, y0, b.1),
+                p(b.0, y0 + h, b.1),
+                p(a.0, y0 + h, a.1),
+            ];
             quad(s, name, q, m);
             let mut r = q;
             r.reverse();
             quad(s, &format!("{name} back"), r, m);
         }
         Walls::Thick => {
-            let (lo, hi) = (p(a.0.min(b.0), y0, a.1.min(b.1)), p(a.0.max(b.0), y0 + h, a.1.max(b.1)));
+            let (lo, hi) = (
+                p(a.0.min(b.0), y0, a.1.min(b.1)),
+                p(a.0.max(b.0), y0 + h, a.1.max(b.1)),
+            );
             let pad = |v: f64, w: f64| if v == w { T / 2.0 } else { 0.0 };
             let (dx, dz) = (pad(lo.x, hi.x), pad(lo.z, hi.z));
             add_box(s, name, lo - p(dx, 0.0, dz), hi + p(dx, 0.0, dz), m, false);
@@ -68,7 +85,17 @@ fn serpentine(turns: usize, walls: Walls, lit: Lit) -> Scene {
     let lanes = turns + 1;
     let x = lanes as f64 * W;
     let p = DVec3::new;
-    quad(&mut s, "floor", [p(0.0, 0.0, 0.0), p(0.0, 0.0, L), p(x, 0.0, L), p(x, 0.0, 0.0)], f);
+    quad(
+        &mut s,
+        "floor",
+        [
+            p(0.0, 0.0, 0.0),
+            p(0.0, 0.0, L),
+            p(x, 0.0, L),
+            p(x, 0.0, 0.0),
+        ],
+        f,
+    );
     wall(&mut s, "left", (0.0, 0.0), (0.0, L), 0.0, H, walls, w);
     wall(&mut s, "right", (x, 0.0), (x, L), 0.0, H, walls, w);
     wall(&mut s, "near", (0.0, L), (x, L), 0.0, H, walls, w);
@@ -77,7 +104,16 @@ fn serpentine(turns: usize, walls: Walls, lit: Lit) -> Scene {
         let xi = i as f64 * W;
         // Lane 0 runs from the emitter at z = L to z = 0, lane 1 back, and so on.
         let (z0, z1) = if i % 2 == 1 { (W, L) } else { (0.0, L - W) };
-        wall(&mut s, &format!("inner{i}"), (xi, z0), (xi, z1), 0.0, H, walls, w);
+        wall(
+            &mut s,
+            &format!("inner{i}"),
+            (xi, z0),
+            (xi, z1),
+            0.0,
+            H,
+            walls,
+            w,
+        );
     }
     match lit {
         Lit::Sun => {
@@ -95,7 +131,17 @@ fn serpentine(turns: usize, walls: Walls, lit: Lit) -> Scene {
             let z = L - inset - 1e-3;
             let (x0, x1) = (0.15 * W, 0.85 * W);
             // Facing −z, into the first lane.
-            quad(&mut s, "lamp", [p(x0, 0.05, z), p(x0, H - 0.05, z), p(x1, H - 0.05, z), p(x1, 0.05, z)], e);
+            quad(
+                &mut s,
+                "lamp",
+                [
+                    p(x0, 0.05, z),
+                    p(x0, H - 0.05, z),
+                    p(x1, H - 0.05, z),
+                    p(x1, 0.05, z),
+                ],
+                e,
+            );
         }
     }
     default_solver(&mut s, 8);
@@ -113,7 +159,17 @@ fn stack(walls: Walls) -> Scene {
     let g = s.add_material(Material::diffuse("grey", 0.7));
     let p = DVec3::new;
     let (x, z, top) = (2.0, 1.0, 1.5);
-    quad(&mut s, "floor", [p(0.0, 0.0, 0.0), p(0.0, 0.0, z), p(x, 0.0, z), p(x, 0.0, 0.0)], g);
+    quad(
+        &mut s,
+        "floor",
+        [
+            p(0.0, 0.0, 0.0),
+            p(0.0, 0.0, z),
+            p(x, 0.0, z),
+            p(x, 0.0, 0.0),
+        ],
+        g,
+    );
     // Walls as vertical plates: back (z = 0) and the two sides.
     wall(&mut s, "back", (0.0, 0.0), (x, 0.0), 0.0, top, walls, g);
     wall(&mut s, "left", (0.0, 0.0), (0.0, z), 0.0, top, walls, g);
@@ -180,7 +236,11 @@ fn check(key: &str, scene: &Scene, gpu: bool, bound: &Bound) {
         },
         ..Options::backend(backend)
     };
-    let backends: &[Backend] = if gpu { &[Backend::Cpu, Backend::Gpu] } else { &[Backend::Cpu] };
+    let backends: &[Backend] = if gpu {
+        &[Backend::Cpu, Backend::Gpu]
+    } else {
+        &[Backend::Cpu]
+    };
     for &b in backends {
         let r = render_checked(key, scene, options(b, None));
         let d = render_checked(key, scene, options(b, Some(0))).image;
@@ -193,10 +253,29 @@ fn check(key: &str, scene: &Scene, gpu: bool, bound: &Bound) {
             record(&format!("corridors.{key}.p90"), m.indirect_p90, 0.02);
             record(&format!("corridors.{key}.direct"), de, 0.02);
         }
-        assert!(m.rel_rmse < bound.rel_rmse, "{key} {b}: relative RMSE {:.4} ≥ {}", m.rel_rmse, bound.rel_rmse);
-        assert!(m.indirect_median < bound.median, "{key} {b}: median {:.4} ≥ {}", m.indirect_median, bound.median);
-        assert!(m.indirect_p90 < bound.p90, "{key} {b}: 90th percentile {:.4} ≥ {}", m.indirect_p90, bound.p90);
-        assert!(de < bound.direct, "{key} {b}: direct light {de:.4} ≥ {}", bound.direct);
+        assert!(
+            m.rel_rmse < bound.rel_rmse,
+            "{key} {b}: relative RMSE {:.4} ≥ {}",
+            m.rel_rmse,
+            bound.rel_rmse
+        );
+        assert!(
+            m.indirect_median < bound.median,
+            "{key} {b}: median {:.4} ≥ {}",
+            m.indirect_median,
+            bound.median
+        );
+        assert!(
+            m.indirect_p90 < bound.p90,
+            "{key} {b}: 90th percentile {:.4} ≥ {}",
+            m.indirect_p90,
+            bound.p90
+        );
+        assert!(
+            de < bound.direct,
+            "{key} {b}: direct light {de:.4} ≥ {}",
+            bound.direct
+        );
     }
 }
 

@@ -278,7 +278,10 @@ impl Options {
             )));
         }
         // The frame is drawn at k× the image and reduced by the engine when read back.
-        let (w, h) = (camera.width as u64 * k as u64, camera.height as u64 * k as u64);
+        let (w, h) = (
+            camera.width as u64 * k as u64,
+            camera.height as u64 * k as u64,
+        );
         if w.max(h) > 16384 {
             return Err(Error::Invalid(format!(
                 "the image {}×{} supersampled {k}× is {w}×{h} frame pixels, more than 16384 on a side",

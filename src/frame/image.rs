@@ -334,7 +334,11 @@ mod tests {
     #[test]
     fn box_reduction_averages_each_block() {
         let pixels = (0..24).map(|i| [i as f32, 1.0, -(i as f32)]).collect();
-        let big = Image { width: 6, height: 4, pixels };
+        let big = Image {
+            width: 6,
+            height: 4,
+            pixels,
+        };
         let small = big.clone().box_reduced(2);
         assert_eq!((small.width, small.height), (3, 2));
         // Block (1, 1) holds pixels 14, 15, 20, 21 of the 6-wide image.
