@@ -128,15 +128,13 @@ fn veach_bidir_xml_is_its_toml() {
     let reference =
         antiradiance::frame::Image::read_exr(&repo("tests/data/veach-mitsuba/mitsuba.exr"))
             .unwrap();
-    let mut s = xml.clone();
-    s.camera.width = reference.width;
-    s.camera.height = reference.height;
-    let t = (17.5f64.to_radians()).tan() * reference.height as f64 / reference.width as f64;
-    s.camera.fov_y_deg = 2.0 * t.atan().to_degrees();
+    // At Mitsuba's 128×72 the sensor's 35° stay across the image (its `fov_axis` x).
     let r = antiradiance::engine::render(
-        &s,
+        &xml,
         &Options {
             backend: BackendKind::Cpu,
+            width: Some(reference.width),
+            height: Some(reference.height),
             ..Default::default()
         },
         &antiradiance::progress::Silent,
@@ -150,9 +148,48 @@ fn veach_bidir_xml_is_its_toml() {
             / im.pixels.len() as f64
     };
     let ratio = mean(&r.image) / mean(&reference);
-    println!("veach-bidir XML against Mitsuba 3: mean ratio {ratio:.3}");
+    // Per region as well as in all: the median relative error of 8×8-pixel block means (a
+    // block's mean holds Mitsuba's fireflies to about 5%: the project's path tracer at 8192 spp
+    // is 5.6% from Mitsuba at this median, its mean 1.005×).
+    let median = block_median_error(&r.image, &reference, 8);
+    println!("veach-bidir XML against Mitsuba 3: mean ratio {ratio:.3}, 8×8 blocks' median relative error {median:.3}");
     common::record("veach.mitsuba-ratio", ratio, 0.02);
+    common::record("veach.mitsuba-block-median", median, 0.02);
     assert!((ratio - 1.0).abs() < 0.35, "{ratio}");
+    // Measured 0.185 (0.226 before faces lying back to back stopped blocking twice).
+    assert!(median < 0.28, "{median}");
+}
+
+/// The median over `b`×`b` blocks of |test/reference − 1| of the blocks' mean luminance.
+fn block_median_error(
+    test: &antiradiance::frame::Image,
+    reference: &antiradiance::frame::Image,
+    b: usize,
+) -> f64 {
+    let blocks = |im: &antiradiance::frame::Image| {
+        let (w, bw, bh) = (
+            im.width as usize,
+            im.width as usize / b,
+            im.height as usize / b,
+        );
+        let mut v = vec![0.0f64; bw * bh];
+        for y in 0..bh * b {
+            for x in 0..bw * b {
+                let p = im.pixels[y * w + x];
+                v[(y / b) * bw + x / b] += (p[0] + p[1] + p[2]) as f64;
+            }
+        }
+        v
+    };
+    let (t, r) = (blocks(test), blocks(reference));
+    let mut e: Vec<f64> = t
+        .iter()
+        .zip(&r)
+        .filter(|(_, r)| **r > 0.0)
+        .map(|(t, r)| (t / r - 1.0).abs())
+        .collect();
+    e.sort_by(f64::total_cmp);
+    e[e.len() / 2]
 }
 
 #[test]

@@ -267,8 +267,11 @@ impl Options {
             settings.tolerance = None;
         }
         let mut camera = scene.camera.clone();
-        camera.width = self.width.unwrap_or(camera.width);
-        camera.height = self.height.unwrap_or(camera.height);
+        // A file's field of view stays fixed along its own axis (Mitsuba's `fov_axis`).
+        camera = camera.resized(
+            self.width.unwrap_or(camera.width),
+            self.height.unwrap_or(camera.height),
+        );
         camera.supersample = self.supersample.unwrap_or(camera.supersample);
         let k = camera.supersample;
         let max = crate::scene::MAX_SUPERSAMPLE;

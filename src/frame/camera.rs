@@ -98,6 +98,7 @@ mod tests {
             width: 64,
             height: 48,
             supersample: 1,
+            fov_axis: Default::default(),
         };
         let v = View::new(&cam);
         let m = v.view_proj(0.01, 100.0);

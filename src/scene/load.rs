@@ -197,6 +197,7 @@ pub(super) fn framing(scene: &Scene) -> Camera {
         width: 512,
         height: 512,
         supersample: 1,
+        fov_axis: Default::default(),
     }
 }
 
@@ -313,6 +314,7 @@ fn camera(c: &format::CameraDesc, path: &Path) -> Result<Camera> {
                 ))
             }
         },
+        fov_axis: Default::default(),
     })
 }
 

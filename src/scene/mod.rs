@@ -173,6 +173,59 @@ pub struct Camera {
     /// each): 1..=[`MAX_SUPERSAMPLE`], default 1. The frame is drawn at `supersample` × the
     /// size and reduced when read back; the solve does not depend on it.
     pub supersample: u32,
+    /// The axis whose field of view the scene file fixed: when `width` or `height` is
+    /// overridden, [`Camera::resized`] keeps the angle along it (a Mitsuba sensor's `fov_axis`,
+    /// `x` by default; TOML and glTF state the vertical angle).
+    pub fov_axis: FovAxis,
+}
+
+/// The image axis a camera's field of view is measured along.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FovAxis {
+    /// Vertical (`fov_y_deg` as it stands).
+    #[default]
+    Y,
+    /// Horizontal.
+    X,
+    /// The image's diagonal.
+    Diagonal,
+    /// The shorter side.
+    Smaller,
+    /// The longer side.
+    Larger,
+}
+
+impl FovAxis {
+    /// tan(fov_y/2) from the tangent of half the angle along this axis, for a `w`×`h` image.
+    pub fn tan_half_y(self, t: f64, w: f64, h: f64) -> f64 {
+        match self {
+            FovAxis::Y => t,
+            FovAxis::X => t * h / w,
+            FovAxis::Diagonal => t * h / (w * w + h * h).sqrt(),
+            FovAxis::Smaller if w > h => t,
+            FovAxis::Larger if w < h => t,
+            FovAxis::Smaller | FovAxis::Larger => t * h / w,
+        }
+    }
+}
+
+impl Camera {
+    /// The camera at `width`×`height`, the angle along [`Camera::fov_axis`] kept.
+    pub fn resized(&self, width: u32, height: u32) -> Camera {
+        let ty = (self.fov_y_deg.to_radians() * 0.5).tan();
+        let (w0, h0) = (self.width.max(1) as f64, self.height.max(1) as f64);
+        // The tangent along the axis, from the vertical one at the old size.
+        let t = ty / self.fov_axis.tan_half_y(1.0, w0, h0);
+        let ty = self
+            .fov_axis
+            .tan_half_y(t, width.max(1) as f64, height.max(1) as f64);
+        Camera {
+            width,
+            height,
+            fov_y_deg: 2.0 * ty.atan().to_degrees(),
+            ..self.clone()
+        }
+    }
 }
 
 /// Largest [`Camera::supersample`].
@@ -356,6 +409,7 @@ impl Scene {
                 width: 512,
                 height: 512,
                 supersample: 1,
+                fov_axis: Default::default(),
             },
             solver: SolverSettings::default(),
             warnings: Vec::new(),
@@ -431,4 +485,36 @@ pub(crate) fn test_plane(ks: f64) -> Scene {
     s.solver.bins = 32;
     s.solver.element_size = 0.6;
     s
+}
+
+#[cfg(test)]
+mod fov_tests {
+    use super::*;
+
+    fn tan_x(c: &Camera) -> f64 {
+        (c.fov_y_deg.to_radians() * 0.5).tan() * c.width as f64 / c.height as f64
+    }
+
+    #[test]
+    fn a_resized_camera_keeps_the_angle_along_its_axis() {
+        let mut c = Scene::empty().camera;
+        (c.width, c.height, c.fov_y_deg) = (1024, 1024, 35.0);
+        // Vertical: the angle as stated.
+        assert_eq!(c.resized(128, 72).fov_y_deg, 35.0);
+        // Mitsuba's default axis x: 35° across at 1024² and at 128×72 (20.11° vertically).
+        c.fov_axis = FovAxis::X;
+        let r = c.resized(128, 72);
+        assert!((tan_x(&r) - (17.5f64).to_radians().tan()).abs() < 1e-12);
+        assert!((r.fov_y_deg - 20.1135).abs() < 1e-3, "{}", r.fov_y_deg);
+        // The diagonal kept: tan along it is the same at both sizes.
+        c.fov_axis = FovAxis::Diagonal;
+        let r = c.resized(300, 100);
+        let diag = |c: &Camera| {
+            let (w, h) = (c.width as f64, c.height as f64);
+            (c.fov_y_deg.to_radians() * 0.5).tan() * (w * w + h * h).sqrt() / h
+        };
+        assert!((diag(&r) - diag(&c)).abs() < 1e-12);
+        // The same size changes nothing.
+        assert_eq!(c.resized(1024, 1024), c);
+    }
 }

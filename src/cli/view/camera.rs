@@ -150,6 +150,7 @@ mod tests {
             width: 64,
             height: 64,
             supersample: 1,
+            fov_axis: Default::default(),
         }
     }
 

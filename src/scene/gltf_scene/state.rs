@@ -358,6 +358,7 @@ impl State<'_> {
             width,
             height,
             supersample: 1,
+            fov_axis: Default::default(),
         });
     }
 

@@ -2,7 +2,7 @@
 
 use super::{Reader, Value};
 use crate::error::Result;
-use crate::scene::{Camera, Light, Scene, MAX_SOURCE};
+use crate::scene::{Camera, FovAxis, Light, Scene, MAX_SOURCE};
 use glam::{DMat4, DVec3};
 use roxmltree::Node;
 
@@ -163,14 +163,15 @@ impl<'a, 'i> Reader<'a, 'i> {
             _ if p.contains_key("focallength") || !p.contains_key("fov") => "diagonal",
             _ => "x",
         };
-        let t = (fov.to_radians() * 0.5).tan();
-        let ty = match axis {
-            "y" => t,
-            "diagonal" => t * height / (width * width + height * height).sqrt(),
-            "smaller" if width > height => t,
-            "larger" if width < height => t,
-            _ => t * height / width,
+        let fov_axis = match axis {
+            "y" => FovAxis::Y,
+            "diagonal" => FovAxis::Diagonal,
+            "smaller" => FovAxis::Smaller,
+            "larger" => FovAxis::Larger,
+            _ => FovAxis::X,
         };
+        let t = (fov.to_radians() * 0.5).tan();
+        let ty = fov_axis.tan_half_y(t, width, height);
         let fov_y = 2.0 * ty.atan().to_degrees();
         let eye = m.transform_point3(DVec3::ZERO);
         let forward = m.transform_vector3(DVec3::Z).normalize_or_zero();
@@ -189,6 +190,7 @@ impl<'a, 'i> Reader<'a, 'i> {
             width: width as u32,
             height: height as u32,
             supersample: 1,
+            fov_axis,
         }))
     }
 }
