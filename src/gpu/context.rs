@@ -9,11 +9,13 @@ use crate::error::{Error, Result};
 use crate::gpu::error::VkContext;
 use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
-use std::ffi::{c_void, CStr, CString};
+use std::ffi::{c_void, CString};
 use std::mem::ManuallyDrop;
 use std::sync::{Arc, Mutex};
 
-const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
+use super::device::pick_device;
+pub use super::validation::ValidationLog;
+use super::validation::{on_message, VALIDATION_LAYER};
 
 /// How lines are rasterized, which decides where the vertex shaders put line endpoints.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -73,44 +75,6 @@ pub struct DeviceInfo {
     pub max_line_width: u32,
     /// Largest single allocation / heap size of device-local memory, bytes.
     pub device_local_bytes: u64,
-}
-
-/// Validation messages collected by the debug messenger.
-#[derive(Debug, Default)]
-pub struct ValidationLog {
-    errors: Mutex<Vec<String>>,
-}
-
-impl ValidationLog {
-    /// Validation errors (and warnings) seen so far.
-    pub fn messages(&self) -> Vec<String> {
-        self.errors.lock().map(|e| e.clone()).unwrap_or_default()
-    }
-}
-
-unsafe extern "system" fn on_message(
-    severity: vk::DebugUtilsMessageSeverityFlagsEXT,
-    _kind: vk::DebugUtilsMessageTypeFlagsEXT,
-    data: *const vk::DebugUtilsMessengerCallbackDataEXT<'_>,
-    user: *mut c_void,
-) -> vk::Bool32 {
-    if data.is_null() || user.is_null() {
-        return vk::FALSE;
-    }
-    let msg = unsafe { (*data).message_as_c_str() }
-        .map(|m| m.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let log = unsafe { &*(user as *const ValidationLog) };
-    if severity.intersects(
-        vk::DebugUtilsMessageSeverityFlagsEXT::ERROR
-            | vk::DebugUtilsMessageSeverityFlagsEXT::WARNING,
-    ) {
-        eprintln!("vulkan validation: {msg}");
-        if let Ok(mut e) = log.errors.lock() {
-            e.push(msg);
-        }
-    }
-    vk::FALSE
 }
 
 /// A Vulkan device, queue and allocator, owned or borrowed from a host application.
@@ -563,52 +527,6 @@ impl Submitter {
             .vk("creating a fence")?;
         Ok(Self { cmd, fence })
     }
-}
-
-fn pick_device(
-    instance: &ash::Instance,
-    wanted: Option<String>,
-) -> Result<(vk::PhysicalDevice, u32)> {
-    let wanted = wanted.or_else(|| std::env::var("ANTIRADIANCE_DEVICE").ok());
-    let devices = unsafe { instance.enumerate_physical_devices() }.vk("listing devices")?;
-    let mut best: Option<(i32, vk::PhysicalDevice, u32)> = None;
-    for pd in devices {
-        let props = unsafe { instance.get_physical_device_properties(pd) };
-        if props.api_version < vk::API_VERSION_1_3 {
-            continue;
-        }
-        let name = props
-            .device_name_as_c_str()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        if let Some(w) = &wanted {
-            if !name.contains(w.as_str()) {
-                continue;
-            }
-        }
-        let qf = unsafe { instance.get_physical_device_queue_family_properties(pd) };
-        let Some(family) = qf
-            .iter()
-            .position(|q| q.queue_flags.contains(vk::QueueFlags::GRAPHICS))
-        else {
-            continue;
-        };
-        let score = match props.device_type {
-            vk::PhysicalDeviceType::DISCRETE_GPU => 3,
-            vk::PhysicalDeviceType::INTEGRATED_GPU => 2,
-            vk::PhysicalDeviceType::CPU => 1,
-            _ => 0,
-        };
-        if best.is_none_or(|b| score > b.0) {
-            best = Some((score, pd, family as u32));
-        }
-    }
-    best.map(|b| (b.1, b.2)).ok_or_else(|| {
-        Error::Device(match wanted {
-            Some(w) => format!("no Vulkan 1.3 device with a graphics queue named like `{w}`"),
-            None => "no Vulkan 1.3 device with a graphics queue (install mesa-vulkan-drivers for lavapipe)".into(),
-        })
-    })
 }
 
 impl Drop for Context {

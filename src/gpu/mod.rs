@@ -5,6 +5,7 @@
 pub mod barrier;
 pub mod cache;
 pub mod context;
+mod device;
 pub mod diagnostics;
 pub mod error;
 pub mod frame;
@@ -22,6 +23,7 @@ pub mod shaders;
 pub mod solver;
 pub mod staged;
 pub mod tables;
+pub mod validation;
 pub mod work;
 
 pub use context::{Context, ContextOptions, HostDevice, LineMode};

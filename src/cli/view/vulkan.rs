@@ -9,7 +9,7 @@ use std::ffi::{c_void, CStr};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use winit::raw_window_handle::{RawDisplayHandle, RawWindowHandle};
 
-const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
+use antiradiance::gpu::validation::VALIDATION_LAYER;
 
 /// Validation errors and warnings seen by the messenger (the viewer fails when any were seen).
 pub static VALIDATION_MESSAGES: AtomicUsize = AtomicUsize::new(0);
