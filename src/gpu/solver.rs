@@ -26,7 +26,7 @@ mod options;
 mod transfer;
 
 pub use follow::FollowUploads;
-pub use options::GpuOptions;
+pub use options::{GpuOptions, SetupTimes};
 
 /// Images a host application may read (all in `SHADER_READ_ONLY_OPTIMAL` after a recorded
 /// iteration), with the layout that addresses them.
@@ -84,25 +84,6 @@ pub struct GpuSolver {
 struct Held {
     i_ex: bool,
     i_total: bool,
-}
-
-/// Wall time of a GPU object's creation, split as `profile` reports it.
-#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
-pub struct SetupTimes {
-    /// Creating images and buffers and uploading their contents (with the CPU packing).
-    pub uploads_ms: f64,
-    /// Creating pipelines (from the pipeline cache when it holds them).
-    pub pipelines_ms: f64,
-}
-
-impl std::ops::Add for SetupTimes {
-    type Output = Self;
-    fn add(self, o: Self) -> Self {
-        Self {
-            uploads_ms: self.uploads_ms + o.uploads_ms,
-            pipelines_ms: self.pipelines_ms + o.pipelines_ms,
-        }
-    }
 }
 
 impl GpuSolver {

@@ -1,4 +1,4 @@
-//! What a [`super::GpuSolver`] is built with.
+//! What a [`super::GpuSolver`] is built with, and what building it took.
 
 use crate::plan::Features;
 use crate::scene::Precision;
@@ -35,6 +35,25 @@ impl Default for GpuOptions {
             force_table_accumulation: false,
             features: None,
             link_range: None,
+        }
+    }
+}
+
+/// Wall time of a GPU object's creation, split as `profile` reports it.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct SetupTimes {
+    /// Creating images and buffers and uploading their contents (with the CPU packing).
+    pub uploads_ms: f64,
+    /// Creating pipelines (from the pipeline cache when it holds them).
+    pub pipelines_ms: f64,
+}
+
+impl std::ops::Add for SetupTimes {
+    type Output = Self;
+    fn add(self, o: Self) -> Self {
+        Self {
+            uploads_ms: self.uploads_ms + o.uploads_ms,
+            pipelines_ms: self.pipelines_ms + o.pipelines_ms,
         }
     }
 }
