@@ -103,6 +103,27 @@ pub fn partly_behind(receiver: &Element, sender: &Element) -> bool {
     })
 }
 
+/// [`partly_in_front`] and [`partly_behind`] in one pass over the corners, stopping once both
+/// are found; the corner's distance (a square root) is taken only where the signed height
+/// alone does not decide the tolerance (|d| ≤ |d|₁, so `h > 1e-7 |d|₁` implies `h > 1e-7 |d|`).
+fn sides_by_corners(receiver: &Element, sender: &Element) -> (bool, bool) {
+    let (mut front, mut behind) = (false, false);
+    for c in sender.corner_points() {
+        let d = c - receiver.center;
+        let h = receiver.normal.dot(d);
+        let l1 = d.abs().element_sum();
+        if h > 0.0 && !front {
+            front = h > 1e-7 * l1 || h > 1e-7 * d.length();
+        } else if h < 0.0 && !behind {
+            behind = -h > 1e-7 * l1 || h < -1e-7 * d.length();
+        }
+        if front && behind {
+            break;
+        }
+    }
+    (front, behind)
+}
+
 /// Relative width of a tie in the refinement tests: far above f64 rounding, far below any real
 /// difference between two configurations.
 const TIE: f64 = 1e-9;
@@ -188,7 +209,7 @@ impl<'a> Ctx<'a> {
         } else if h + n.radius < -margin {
             (false, true)
         } else {
-            (partly_in_front(re, se), partly_behind(re, se))
+            sides_by_corners(re, se)
         }
     }
 

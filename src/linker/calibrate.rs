@@ -48,6 +48,119 @@ pub fn projected_solid_angle(p: DVec3, n: DVec3, tri: &[DVec3; 3]) -> f64 {
     (0.5 * sum).abs()
 }
 
+/// Per face of `faces` and per edge (corner i → i+1), the face that shares the edge in reverse
+/// (`u32::MAX`: none). Two faces sharing an edge traverse it in opposite directions, and
+/// Lambert's formula gives the two traversals exactly opposite terms (the same angle, negated
+/// cross products), so over a set of faces whose terms share a sign only the edges whose
+/// partner lies outside the set need evaluating: a face cluster of 20 triangles has about 20
+/// such edges of 60.
+fn partners(faces: &[crate::elements::Face]) -> Vec<[u32; 3]> {
+    let key = |v: DVec3| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()];
+    let mut by_edge: std::collections::HashMap<([u64; 3], [u64; 3]), Vec<u32>> = Default::default();
+    for (k, f) in faces.iter().enumerate() {
+        for i in 0..3 {
+            let e = (key(f.corners[i]), key(f.corners[(i + 1) % 3]));
+            by_edge.entry(e).or_default().push(k as u32);
+        }
+    }
+    let mut out = vec![[u32::MAX; 3]; faces.len()];
+    for (k, f) in faces.iter().enumerate() {
+        for i in 0..3 {
+            if out[k][i] != u32::MAX {
+                continue;
+            }
+            let reverse = (key(f.corners[(i + 1) % 3]), key(f.corners[i]));
+            // Pair with the first reverse traversal not yet paired (a manifold edge has one).
+            let Some(others) = by_edge.get(&reverse) else {
+                continue;
+            };
+            for &o in others {
+                let oi = (0..3)
+                    .find(|&j| {
+                        (
+                            key(faces[o as usize].corners[j]),
+                            key(faces[o as usize].corners[(j + 1) % 3]),
+                        ) == reverse
+                    })
+                    .unwrap();
+                if o as usize != k && out[o as usize][oi] == u32::MAX {
+                    out[k][i] = o;
+                    out[o as usize][oi] = k as u32;
+                    break;
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Lambert's term of the edge `a → b` (corners relative to the point) for the normal `n`.
+fn edge_term(n: DVec3, a: DVec3, b: DVec3) -> f64 {
+    let c = a.cross(b);
+    let cl = c.length();
+    if cl < 1e-300 {
+        return 0.0;
+    }
+    cl.atan2(a.dot(b)) * n.dot(c / cl)
+}
+
+/// Projected solid angle of the element `s`'s faces from `p` with normal `n`, the sum of
+/// [`projected_solid_angle`] over its faces computed with fewer edges: faces wholly in front of
+/// `p`'s plane are grouped by the side they turn toward `p` (within a group every face's term
+/// has one sign), and each group's sum is taken over the edges it does not share with itself
+/// ([`partners`]); faces that the plane clips are taken one by one.
+fn sender_projected_solid_angle(
+    p: DVec3,
+    n: DVec3,
+    s: &Element,
+    partners: Option<&[[u32; 3]]>,
+) -> f64 {
+    let Some(partners) = partners else {
+        return s
+            .faces
+            .iter()
+            .map(|f| projected_solid_angle(p, n, &f.corners))
+            .sum();
+    };
+    // Group of each face: 0 clipped, 1 and 2 the two orientations toward p.
+    const STACK: usize = 64;
+    let mut small = [0u8; STACK];
+    let mut large = Vec::new();
+    let group: &mut [u8] = if s.faces.len() <= STACK {
+        &mut small[..s.faces.len()]
+    } else {
+        large.resize(s.faces.len(), 0);
+        &mut large
+    };
+    let mut clipped = 0.0;
+    for (g, f) in group.iter_mut().zip(&s.faces) {
+        let [a, b, c] = f.corners.map(|v| v - p);
+        *g = if n.dot(a) < 0.0 || n.dot(b) < 0.0 || n.dot(c) < 0.0 {
+            clipped += projected_solid_angle(p, n, &f.corners);
+            0
+        } else if a.dot(b.cross(c)) >= 0.0 {
+            1
+        } else {
+            2
+        };
+    }
+    let mut sums = [0.0f64; 3];
+    for (k, f) in s.faces.iter().enumerate() {
+        let g = group[k];
+        if g == 0 {
+            continue;
+        }
+        for i in 0..3 {
+            let o = partners[k][i];
+            if o != u32::MAX && group[o as usize] == g {
+                continue;
+            }
+            sums[g as usize] += edge_term(n, f.corners[i] - p, f.corners[(i + 1) % 3] - p);
+        }
+    }
+    clipped + 0.5 * (sums[1].abs() + sums[2].abs())
+}
+
 /// Per node, the receiving profile `G(j) = Σ a_r c_r max(0, −n_r·ω_j)` over the leaves `r` below
 /// it (`c_r` the cosine normalization): what a unit radiance arriving in bin `j` delivers, as
 /// irradiance × area, to the node's leaves in the local pass. Sums of children, so built bottom-up.
@@ -125,6 +238,19 @@ pub fn calibrate_links(
         .map(|e| bins.cosine_normalization(e.normal))
         .collect();
     let profiles = receiving_profiles(h, els, bins, &cos_norm);
+    // The shared edges of the leaf senders with several faces (only those these links use: the
+    // bounded link mesh recalibrates a few links per frame).
+    let mut multi = vec![false; els.len()];
+    for l in links.iter() {
+        if let (Some(_), Some(s)) = (h.element(l.receiver), h.element(l.sender)) {
+            multi[s as usize] = els[s as usize].faces.len() > 1;
+        }
+    }
+    let partners: Vec<Option<Vec<[u32; 3]>>> = els
+        .par_iter()
+        .zip(&multi)
+        .map(|(e, &m)| m.then(|| partners(&e.faces)))
+        .collect();
     // Element indices of the leaves below node `n` (a contiguous pre-order range).
     let leaves_below = |n: u32| (n..h.nodes[n as usize].end).filter_map(|k| h.element(k));
     links.par_iter_mut().for_each(|l| {
@@ -206,11 +332,7 @@ pub fn calibrate_links(
         if spread <= 0.0 {
             return;
         }
-        let phi: f64 = s
-            .faces
-            .iter()
-            .map(|f| projected_solid_angle(r.center, rn, &f.corners))
-            .sum();
+        let phi = sender_projected_solid_angle(r.center, rn, s, partners[se as usize].as_deref());
         let delivered = bins.omega
             * cos_norm[re as usize]
             * s.area
@@ -221,4 +343,78 @@ pub fn calibrate_links(
         l.receiver_bin = b as u16;
         l.form_factor = phi / delivered;
     });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::elements::Face;
+
+    /// A 4 × 4 grid of quads (32 triangles, consistently wound) on a gently curved sheet.
+    fn sheet() -> Element {
+        let z = |x: f64, y: f64| 0.1 * (x * 1.3).sin() * (y * 0.7).cos();
+        let v = |i: usize, j: usize| {
+            let (x, y) = (i as f64 * 0.25, j as f64 * 0.25);
+            DVec3::new(x, y, z(x, y))
+        };
+        let mut faces = Vec::new();
+        for i in 0..4 {
+            for j in 0..4 {
+                let (a, b, c, d) = (v(i, j), v(i + 1, j), v(i + 1, j + 1), v(i, j + 1));
+                faces.push(Face {
+                    corners: [a, b, c],
+                    triangle: 0,
+                });
+                faces.push(Face {
+                    corners: [a, c, d],
+                    triangle: 0,
+                });
+            }
+        }
+        Element::from_faces(faces, 0, 0)
+    }
+
+    /// On a connected sheet only the boundary's 16 edges of 96 have no partner, and the
+    /// projected solid angle by partner-less edges per orientation group equals the face-by-face
+    /// sum, from points that see it whole, clipped, and from its other side.
+    #[test]
+    fn shared_edges_give_the_face_by_face_projected_solid_angle() {
+        let s = sheet();
+        let pairs = partners(&s.faces);
+        let unpaired = pairs.iter().flatten().filter(|&&o| o == u32::MAX).count();
+        assert_eq!(unpaired, 16);
+        let (mut whole, mut clipped) = (0, 0);
+        for k in 0..400 {
+            let t = k as f64 * 0.37;
+            let p = DVec3::new(
+                0.5 + 1.5 * t.sin(),
+                0.5 + 1.2 * (1.7 * t).cos(),
+                0.05 + 0.8 * (0.3 * t).sin(),
+            );
+            let n =
+                (DVec3::new(0.3 * (2.3 * t).sin(), 0.2 * t.cos(), -1.0) * p.z.signum()).normalize();
+            let face_by_face: f64 = s
+                .faces
+                .iter()
+                .map(|f| projected_solid_angle(p, n, &f.corners))
+                .sum();
+            let got = sender_projected_solid_angle(p, n, &s, Some(&pairs));
+            assert!(
+                (got - face_by_face).abs() <= 1e-12 * face_by_face.max(1e-3),
+                "{p}: {got} against {face_by_face}"
+            );
+            if s.faces
+                .iter()
+                .any(|f| f.corners.iter().any(|&c| n.dot(c - p) < 0.0))
+            {
+                clipped += 1;
+            } else {
+                whole += 1;
+            }
+        }
+        assert!(
+            whole > 50 && clipped > 50,
+            "{whole} whole, {clipped} clipped"
+        );
+    }
 }
