@@ -27,6 +27,7 @@
 #define AR_BINDING_LOBE_BINS 15
 #define AR_BINDING_LINKS 16
 #define AR_BINDING_ENVIRONMENT 17
+#define AR_BINDING_ROUNDED 18
 
 // The glossy lobes' incident-bin lists are per cell of a grid this much finer (per side) than
 // the bins' (src/gpu/pack.rs LOBE_REFINE).
@@ -163,6 +164,29 @@ layout(constant_id = AR_SPEC_GRID_ROWS) const uint AR_GRID_ROWS = 1u;        // 
 layout(constant_id = AR_SPEC_ROWS_PER_COLUMN) const uint AR_ROWS_PER_COLUMN = 1u;
 layout(constant_id = AR_SPEC_TILE_NODES) const uint AR_TILE_NODES = 1u;      // incident tiles per column
 const uint AR_GRID_COLUMNS = AR_BINS / AR_GRID_ROWS;                         // nu of the bin grid
+
+// Float16 blending rounded to nearest, emulated (src/gpu/blend16.rs): the width of the incident
+// tables where the global and push passes add into the ROUNDED buffer instead of blending; 0
+// where they blend (every real device).
+#define AR_SPEC_ROUND_WIDTH 12
+layout(constant_id = AR_SPEC_ROUND_WIDTH) const uint AR_ROUND_WIDTH = 0u;
+
+// x rounded to the nearest float16 value, ties to even, kept in a float: finite values beyond
+// float16's range become ±infinity, values below its smallest normal round on the subnormals'
+// step 2^-24, as a device's float16 attachment stores them.
+float ar_round_f16(float x) {
+    if (isnan(x)) {
+        return x;
+    }
+    if (abs(x) >= 65520.0) {  // at and above halfway from 65504 to 2^16: infinity
+        return x > 0.0 ? 1.0 / 0.0 : -1.0 / 0.0;
+    }
+    // The float16 step at x: 2^(e-10) for |x| in [2^e, 2^(e+1)), and 2^-24 below 2^-14 (the
+    // subnormals); x / step and its product are exact (powers of two).
+    uint e = max((floatBitsToUint(x) >> 23) & 0xffu, 113u);
+    float step = uintBitsToFloat((e - 10u) << 23);
+    return roundEven(x / step) * step;
+}
 
 // Incident tables (src/gpu/tables.rs TableLayout::tile_texel): row r's tile has its bin 0 at
 // ((r / T) * nu, (r % T) * nv), bin iv*nu + iu at offset (iu, iv).

@@ -2,7 +2,7 @@
 // Global pass: the link's F · I_ex weighted by its cone-filter table at this bin, accumulated
 // into L_in by additive blending; the rectangle's bins outside the mask (no filter weight, or
 // a bin the leaf receiver never reads) are discarded.
-#include "common.glsl"
+#include "round16.glsl"
 
 layout(binding = AR_BINDING_FILTER) uniform sampler2D filter_table;
 
@@ -22,5 +22,10 @@ void main() {
     // finds its weight without a division.
     int column = int(place.y & 0xffffu) + d.y * int(AR_GRID_COLUMNS) + d.x;
     float w = texelFetch(filter_table, ivec2(column, place.z), 0).r;
+    if (AR_ROUND_WIDTH != 0u) {
+        ar_round_add(ivec2(gl_FragCoord.xy), sent * w);
+        l_in = vec4(0.0);
+        return;
+    }
     l_in = vec4(sent * w, 0.0);
 }

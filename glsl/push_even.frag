@@ -16,5 +16,6 @@ void main() {
     if (other != 0xffffffffu && ar_pushes(row, j)) {
         v += texelFetch(l_in, ar_in_texel(other, j), 0).rgb;
     }
-    pushed = vec4(v, 0.0);
+    // A float16 target rounds what it stores (emulated: the target is float32).
+    pushed = vec4(AR_ROUND_WIDTH != 0u ? vec3(ar_round_f16(v.r), ar_round_f16(v.g), ar_round_f16(v.b)) : v, 0.0);
 }

@@ -3,6 +3,7 @@
 // node's own tile of the L_in image by additive blending, which then holds L_push(node). At a leaf
 // only on its front (push.glsl).
 #include "push.glsl"
+#include "round16.glsl"
 
 layout(binding = AR_BINDING_L_PUSH) uniform sampler2D l_push;
 layout(location = 0) flat in uint row;
@@ -13,4 +14,8 @@ void main() {
     uint j = ar_in_bin_at(ivec2(gl_FragCoord.xy));
     bool add = ar_pushes(row, j);
     pushed = add ? vec4(texelFetch(l_push, ar_in_texel(other, j), 0).rgb, 0.0) : vec4(0.0);
+    if (AR_ROUND_WIDTH != 0u) {
+        ar_round_add(ivec2(gl_FragCoord.xy), pushed.rgb);
+        pushed = vec4(0.0);
+    }
 }

@@ -647,3 +647,126 @@ fn reduced_figures_equal_the_cpu_definition() {
     }
     assert_clean(&ctx);
 }
+
+/// Float16 accumulation, the paper's own path, as a device that rounds its float16 blending to
+/// nearest performs it (emulated in the shaders, `gpu::blend16`: lavapipe's blending truncates,
+/// so without the emulation this path never runs in CI). Both schemes on the Cornell box, the
+/// glossy box and MNRoom against the CPU solver, beside the float16 tables accumulated in
+/// float32 (the tables' rounding alone): the rounded accumulation must add error of its own
+/// (measured 5–14× the tables' alone) and stay far below truncation's (0.15 / 0.25–0.26 /
+/// 0.46–0.49 measured with `ANTIRADIANCE_TEST_F16_ACCUMULATION=1`). The adds' order varies
+/// between runs (compare-and-swap), so the figures do too, by a few percent.
+#[test]
+fn float16_accumulation_rounded_to_nearest_matches_cpu() {
+    let ctx = context();
+    let rounded = GpuOptions {
+        emulate_f16_rounding: true,
+        ..Default::default()
+    };
+    // (scene, element size, [symmetric, asymmetric] bounds): about 2× the worst measured.
+    let cases = [
+        // Measured 2.46e-2 / 2.05e-2 (tables alone 1.9e-3 / 1.4e-3).
+        ("scenes/cornell-box.toml", 0.5, [5e-2, 4e-2]),
+        // Measured 3.63e-2 / 1.71e-2 (tables alone 3.0e-3 / 2.5e-3).
+        ("scenes/cornell-box-glossy.toml", 0.5, [7e-2, 3.5e-2]),
+        // Measured 1.55e-2 / 2.91e-2 (tables alone 5.4e-3 / 5.1e-3).
+        ("scenes/mnroom.toml", 5.0, [3e-2, 6e-2]),
+    ];
+    for (path, size, bounds) in cases {
+        let scene = small(path, 32, size);
+        for (scheme, bound) in [Scheme::Symmetric, Scheme::Asymmetric]
+            .into_iter()
+            .zip(bounds)
+        {
+            let tol = |t| Tol {
+                f32: t,
+                f16: t,
+                f16_accumulated: t,
+            };
+            let default = GpuOptions::default();
+            let tables = compare(
+                &ctx,
+                &scene,
+                scheme,
+                Precision::F16,
+                8,
+                default,
+                false,
+                false,
+                tol(1.0),
+            );
+            let w = compare(
+                &ctx,
+                &scene,
+                scheme,
+                Precision::F16,
+                8,
+                rounded,
+                false,
+                false,
+                tol(bound),
+            );
+            eprintln!(
+                "{path} {scheme:?}: float16 accumulation rounded to nearest {w:.3e}, float32 accumulation {tables:.3e}"
+            );
+            assert!(
+                w > 2.0 * tables,
+                "{path} {scheme:?}: rounded accumulation {w:.2e} is not above the tables' own {tables:.2e}: is it rounding?"
+            );
+            if path == "scenes/cornell-box.toml" && scheme == Scheme::Symmetric {
+                record("gpu-vs-cpu.f16-rounded", w, 0.5);
+            }
+        }
+    }
+}
+
+/// Under the emulation every incident value the passes leave is a float16 value (L_in from the
+/// global pass and the push's odd depths, L_push from its even ones), and the solver says it
+/// emulates.
+#[test]
+fn emulated_float16_accumulation_leaves_float16_values() {
+    let ctx = context();
+    let scene = small("scenes/cornell-box.toml", 32, 0.5);
+    let sys = System::build(&scene).unwrap();
+    let opts = GpuOptions {
+        emulate_f16_rounding: true,
+        ..Default::default()
+    };
+    let mut gpu = GpuSolver::new(ctx.clone(), &sys, opts).unwrap();
+    assert!(
+        gpu.fallbacks()
+            .iter()
+            .any(|f| f.contains("rounded to nearest, emulated")),
+        "{:?}",
+        gpu.fallbacks()
+    );
+    gpu.initialize().unwrap();
+    for _ in 0..2 {
+        gpu.iterate(Scheme::Symmetric, 1).unwrap();
+    }
+    let l = gpu.read_l_push().unwrap();
+    // Readback divides by the sources' power-of-two scale: the stored values are these times it.
+    let scale = gpu.scale();
+    let (mut values, mut nonzero) = (0usize, 0usize);
+    for r in 0..l.rows() {
+        for v in l.row(r) {
+            for x in v.to_array().map(|x| x * scale) {
+                let f = x as f32;
+                assert_eq!(f as f64, x, "row {r}: {x} is not a float32");
+                assert_eq!(
+                    half::f16::from_f32(f).to_f32(),
+                    f,
+                    "row {r}: {f} is not a float16"
+                );
+                values += 1;
+                nonzero += (f != 0.0) as usize;
+            }
+        }
+    }
+    // The check saw the light: most of the room's incident values are lit.
+    assert!(
+        nonzero * 2 > values,
+        "{nonzero} of {values} values are not zero"
+    );
+    assert_clean(&ctx);
+}

@@ -66,6 +66,9 @@ pub struct GpuTuning {
     /// Accumulate L_in and L_push in the table format even where the device truncates float16
     /// blending.
     pub force_table_accumulation: bool,
+    /// Accumulate L_in and L_push rounded to nearest float16, emulated in the shaders
+    /// ([`crate::gpu::GpuOptions::emulate_f16_rounding`]).
+    pub emulate_f16_rounding: bool,
     /// Caps the bytes of link records one descriptor reads (exercises the chunked global pass).
     pub link_range: Option<u64>,
 }

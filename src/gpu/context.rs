@@ -75,6 +75,9 @@ pub struct DeviceInfo {
     pub max_line_width: u32,
     /// Largest single allocation / heap size of device-local memory, bytes.
     pub device_local_bytes: u64,
+    /// Whether fragment shaders may write storage buffers (`fragmentStoresAndAtomics`,
+    /// enabled on headless devices that have it): emulated float16 blending needs it.
+    pub fragment_stores: bool,
 }
 
 /// A Vulkan device, queue and allocator, owned or borrowed from a host application.
@@ -234,6 +237,7 @@ impl Context {
         unsafe { instance.get_physical_device_features2(physical_device, &mut f2) };
         let blend_ok = f2.features.independent_blend == vk::TRUE;
         let wide = f2.features.wide_lines == vk::TRUE;
+        let stores = f2.features.fragment_stores_and_atomics == vk::TRUE;
         let (dyn_ok, sync_ok) = (
             f13.dynamic_rendering == vk::TRUE,
             f13.synchronization2 == vk::TRUE,
@@ -267,7 +271,8 @@ impl Context {
         // Wide lines draw a filter's footprint as one line per rectangle of bins.
         let core = vk::PhysicalDeviceFeatures::default()
             .independent_blend(true)
-            .wide_lines(wide);
+            .wide_lines(wide)
+            .fragment_stores_and_atomics(stores);
         let mut dinfo = vk::DeviceCreateInfo::default()
             .queue_create_infos(&qinfo)
             .enabled_features(&core)
@@ -297,6 +302,7 @@ impl Context {
             line_mode,
             rect || bres,
             wide,
+            stores,
             has_debug,
             messenger,
             log,
@@ -322,6 +328,8 @@ impl Context {
             line_mode,
             line_ext,
             wide,
+            // A host's device is used as the host enabled it; emulated blending is for tests.
+            false,
             host.debug_utils,
             None,
             Arc::new(ValidationLog::default()),
@@ -341,6 +349,7 @@ impl Context {
         line_mode: LineMode,
         line_ext: bool,
         wide_lines: bool,
+        fragment_stores: bool,
         has_debug: bool,
         messenger: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
         validation: Arc<ValidationLog>,
@@ -382,6 +391,7 @@ impl Context {
                 1
             },
             device_local_bytes,
+            fragment_stores,
         };
         let allocator = Allocator::new(&AllocatorCreateDesc {
             instance: instance.clone(),

@@ -148,7 +148,7 @@ fn draw(
     }];
     // Only the table layout matters to span.vert; the feature constants keep their values.
     let constants =
-        super::layout::spec::solver_values(&crate::plan::Features::ALL, 0, false, layout);
+        super::layout::spec::solver_values(&crate::plan::Features::ALL, 0, false, layout, false);
     let desc = PipelineDesc {
         name: frag,
         vert: records.vert,

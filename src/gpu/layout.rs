@@ -228,10 +228,13 @@ pub mod binding {
     /// The leaves' first bounce of the shadowed environment per bin
     /// ([`crate::frame::environment`]; 1×1 without an environment).
     pub const ENVIRONMENT: u32 = 17;
+    /// Float16 blending rounded to nearest, emulated ([`crate::gpu::blend16`]): the incident
+    /// tables' sums as float32 bits, four words per texel (one word where not emulated).
+    pub const ROUNDED: u32 = 18;
     /// Number of bindings.
-    pub const COUNT: u32 = 18;
+    pub const COUNT: u32 = 19;
     /// Storage-buffer bindings (the rest are combined image samplers).
-    pub const BUFFERS: [u32; 5] = [MATERIALS, BIN_CENTERS, COMBOS, LOBE_BINS, LINKS];
+    pub const BUFFERS: [u32; 6] = [MATERIALS, BIN_CENTERS, COMBOS, LOBE_BINS, LINKS, ROUNDED];
 }
 
 /// Push constants of the frame passes (`FrameConstants` in common.glsl, 128 bytes: the
@@ -434,8 +437,11 @@ pub mod spec {
     pub const ROWS_PER_COLUMN: u32 = 10;
     /// Incident tables' nodes per column block of tiles (`AR_TILE_NODES`).
     pub const TILE_NODES: u32 = 11;
+    /// The incident tables' width where float16 blending is emulated ([`crate::gpu::blend16`]),
+    /// 0 where the passes blend.
+    pub const ROUND_WIDTH: u32 = 12;
     /// Number of a solver pipeline's constants ([`solver_values`]).
-    pub const SOLVER_COUNT: usize = 12;
+    pub const SOLVER_COUNT: usize = 13;
 
     /// The values of every constant for `features` and local-pass mode `mode`.
     pub fn values(f: &crate::plan::Features, mode: u32, glossy: bool) -> [u32; COUNT] {
@@ -453,12 +459,14 @@ pub mod spec {
 
     /// A solver pipeline's constants: [`values`], then the table layout, which the shaders'
     /// texel addressing divides by (constants let the compiler turn those divisions into
-    /// multiplies; on lavapipe a division by a push constant is a scalar loop per lane).
+    /// multiplies; on lavapipe a division by a push constant is a scalar loop per lane), then
+    /// the incident tables' width where float16 blending is emulated (`round`).
     pub fn solver_values(
         f: &crate::plan::Features,
         mode: u32,
         glossy: bool,
         table: &crate::gpu::tables::TableLayout,
+        round: bool,
     ) -> [u32; SOLVER_COUNT] {
         let mut v = [0; SOLVER_COUNT];
         v[..COUNT].copy_from_slice(&values(f, mode, glossy));
@@ -466,6 +474,7 @@ pub mod spec {
         v[GRID_ROWS as usize] = table.grid_rows;
         v[ROWS_PER_COLUMN as usize] = table.rows_per_column;
         v[TILE_NODES as usize] = table.tile_nodes;
+        v[ROUND_WIDTH as usize] = if round { table.tile_extent().0 } else { 0 };
         v
     }
 }

@@ -3,6 +3,7 @@
 //! images, pull as lines. See the README for the module ↔ paper map.
 
 pub mod barrier;
+pub mod blend16;
 pub mod cache;
 pub mod context;
 mod device;

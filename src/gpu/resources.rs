@@ -99,6 +99,8 @@ resource_set! {
         pub bin_centers,
         /// Incident bins of each glossy lobe's truncated cone, per mirror bin.
         pub lobe_bins,
+        /// The incident tables' sums where float16 blending is emulated ([`super::blend16`]).
+        pub rounded,
     }
 }
 
@@ -235,8 +237,17 @@ impl SolverBuffers<BufferDesc> {
                 sb,
                 Purpose::ElementAttributes,
             ),
+            rounded: rounded_desc(1),
         }
     }
+}
+
+/// The emulated float16 blending's buffer of `words` float32 words ([`super::blend16`]).
+fn rounded_desc(words: usize) -> BufferDesc {
+    let usage = vk::BufferUsageFlags::STORAGE_BUFFER
+        | vk::BufferUsageFlags::TRANSFER_SRC
+        | vk::BufferUsageFlags::TRANSFER_DST;
+    BufferDesc::of::<u32>("float16 rounding sums", words, usage, Purpose::Tables)
 }
 
 /// Everything the solver will create for one scene, as data: the table layout, the draw
@@ -257,6 +268,9 @@ pub struct ResourcePlan {
     pub images: SolverImages<ImageDesc>,
     /// Buffer descriptions.
     pub buffers: SolverBuffers<BufferDesc>,
+    /// Float16 blending rounded to nearest is emulated in the global and push passes
+    /// ([`super::blend16`]; test-only, for devices that truncate).
+    pub round_f16: bool,
 }
 
 impl ResourcePlan {
@@ -310,7 +324,17 @@ impl ResourcePlan {
             format,
             accum_format,
             draw,
+            round_f16: false,
         })
+    }
+
+    /// The same plan with float16 blending rounded to nearest emulated ([`super::blend16`]):
+    /// the incident tables' sums kept in a buffer of four words per texel.
+    pub fn with_round_f16(mut self) -> Self {
+        let (w, h) = self.layout.tile_extent();
+        self.buffers.rounded = rounded_desc(4 * (w as usize) * (h as usize));
+        self.round_f16 = true;
+        self
     }
 
     /// The memory these resources take, by purpose.
@@ -408,6 +432,7 @@ impl Resources {
             lobe_bins: b
                 .lobe_bins
                 .upload(ctx, as_bytes(&super::pack::padded(plan.lobe_bins.clone())))?,
+            rounded: b.rounded.upload(ctx, &vec![0; b.rounded.size as usize])?,
         };
         let sampler = super::pipelines::texel_sampler(ctx, "texelFetch sampler")?;
         let link_chunks = LinkChunks::new(plan.draw.links.len() as u64, link_range);
@@ -492,6 +517,7 @@ impl Resources {
             (binding::COMBOS, b.combos.raw, whole),
             (binding::LOBE_BINS, b.lobe_bins.raw, whole),
             (binding::LINKS, b.links.raw, self.link_chunks.range(chunk)),
+            (binding::ROUNDED, b.rounded.raw, whole),
         ];
         super::pipelines::write_set_ranges(ctx, set, self.sampler.raw(), &images, &buffers);
     }

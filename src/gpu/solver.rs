@@ -96,7 +96,19 @@ impl GpuSolver {
         };
         let features = opts.features.unwrap_or_else(|| Features::for_system(sys));
         let mut fallbacks = Vec::new();
-        let accum_format = if opts.precision == Precision::F16
+        let round_f16 = opts.precision == Precision::F16 && opts.emulate_f16_rounding;
+        if round_f16 && !ctx.info.fragment_stores {
+            return Err(Error::Device(format!(
+                "{} lacks fragmentStoresAndAtomics, which emulated float16 blending needs",
+                ctx.info.name
+            )));
+        }
+        let accum_format = if round_f16 {
+            fallbacks.push(
+                "float16 blending rounded to nearest, emulated in the shaders: L_in and L_push are float32 rounded to float16 at every addition (tables stay float16)".to_string(),
+            );
+            vk::Format::R32G32B32A32_SFLOAT
+        } else if opts.precision == Precision::F16
             && !opts.force_table_accumulation
             && super::diagnostics::f16_blend_rounding(&ctx)? == BlendRounding::TowardZero
         {
@@ -118,6 +130,11 @@ impl GpuSolver {
             opts.max_line_width
                 .map_or(ctx.info.max_line_width, |w| w.min(ctx.info.max_line_width)),
         )?;
+        let plan = if round_f16 {
+            plan.with_round_f16()
+        } else {
+            plan
+        };
         // Shaders read the storage buffers whole, except the link records: the global pass
         // reads those one descriptor range at a time (`gpu::links`).
         let range = ctx.info.max_storage_buffer_range as u64;
@@ -149,6 +166,7 @@ impl GpuSolver {
             accum_format,
             features,
             table: res.plan.layout,
+            round_f16: res.plan.round_f16,
         };
         let mut passes = SolverPasses::new(&spec)?;
         // Every local variant now, so no pipeline is built during the iterations.
@@ -308,6 +326,7 @@ impl GpuSolver {
             accum_format: self.res.plan.accum_format,
             features: self.features,
             table: self.res.plan.layout,
+            round_f16: self.res.plan.round_f16,
         };
         for &m in modes {
             self.passes.local.ensure(&spec, &self.res, m)?;

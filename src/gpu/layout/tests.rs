@@ -59,6 +59,7 @@ fn specialization_ids_match_glsl() {
         ("AR_SPEC_GRID_ROWS", spec::GRID_ROWS),
         ("AR_SPEC_ROWS_PER_COLUMN", spec::ROWS_PER_COLUMN),
         ("AR_SPEC_TILE_NODES", spec::TILE_NODES),
+        ("AR_SPEC_ROUND_WIDTH", spec::ROUND_WIDTH),
     ] {
         assert!(
             COMMON.contains(&format!("#define {name} {id}\n")),
@@ -69,7 +70,7 @@ fn specialization_ids_match_glsl() {
         .unwrap()
         .with_grid(4, 4096)
         .unwrap();
-    let v = spec::solver_values(&crate::plan::Features::ALL, mode::REFLECT, true, &t);
+    let v = spec::solver_values(&crate::plan::Features::ALL, mode::REFLECT, true, &t, false);
     assert_eq!(
         v[..spec::COUNT],
         spec::values(&crate::plan::Features::ALL, mode::REFLECT, true)
@@ -83,6 +84,9 @@ fn specialization_ids_match_glsl() {
         ],
         [32, 4, 40, 10]
     );
+    assert_eq!(v[spec::ROUND_WIDTH as usize], 0);
+    let r = spec::solver_values(&crate::plan::Features::ALL, mode::REFLECT, true, &t, true);
+    assert_eq!(r[spec::ROUND_WIDTH as usize], t.tile_extent().0);
 }
 
 #[test]
@@ -191,6 +195,7 @@ fn bindings_match_glsl() {
         ("LOBE_BINS", binding::LOBE_BINS),
         ("LINKS", binding::LINKS),
         ("ENVIRONMENT", binding::ENVIRONMENT),
+        ("ROUNDED", binding::ROUNDED),
     ];
     assert_eq!(consts.len() as u32, binding::COUNT);
     for (name, value) in consts {

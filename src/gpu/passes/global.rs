@@ -73,6 +73,10 @@ fn record(pipeline: &Owned<vk::Pipeline>, p: &Pass<'_>, res: &mut Resources, cur
             (&mut im.l_in, Access::Attachment),
         ],
     );
+    if res.plan.round_f16 {
+        crate::gpu::blend16::clear(p.ctx, p.cmd, res);
+    }
+    let im = &mut res.images;
     begin_rendering(p.ctx, p.cmd, &[(&im.l_in, Load::Clear)]);
     let extent = im.l_in.extent;
     let mut bound = None;
@@ -91,4 +95,7 @@ fn record(pipeline: &Owned<vk::Pipeline>, p: &Pass<'_>, res: &mut Resources, cur
         }
     }
     end_rendering(p.ctx, p.cmd);
+    if res.plan.round_f16 {
+        crate::gpu::blend16::store(p.ctx, p.cmd, res);
+    }
 }

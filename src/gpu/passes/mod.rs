@@ -39,13 +39,21 @@ pub struct PipelineSpec<'a> {
     pub features: Features,
     /// The tables' layout (specialization constants of every solver shader).
     pub table: super::tables::TableLayout,
+    /// Float16 blending rounded to nearest is emulated ([`crate::gpu::blend16`]).
+    pub round_f16: bool,
 }
 
 impl PipelineSpec<'_> {
     /// The specialization constants of a solver pipeline in local-pass mode `mode`
     /// ([`super::layout::spec::solver_values`]).
     pub fn constants(&self, mode: u32, glossy: bool) -> [u32; super::layout::spec::SOLVER_COUNT] {
-        super::layout::spec::solver_values(&self.features, mode, glossy, &self.table)
+        super::layout::spec::solver_values(
+            &self.features,
+            mode,
+            glossy,
+            &self.table,
+            self.round_f16,
+        )
     }
 
     /// An additive target in the accumulation format (global, push).

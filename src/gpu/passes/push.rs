@@ -116,9 +116,10 @@ fn pipelines(spec: &PipelineSpec<'_>) -> Result<[Owned<vk::Pipeline>; 2]> {
 }
 
 fn record(pipelines: &[Owned<vk::Pipeline>; 2], p: &Pass<'_>, res: &mut Resources) {
-    let im = &mut res.images;
     let bins = res.plan.layout.bins;
-    for (d, range) in res.plan.draw.push_levels.iter().enumerate() {
+    for d in 0..res.plan.draw.push_levels.len() {
+        let range = res.plan.draw.push_levels[d].clone();
+        let im = &mut res.images;
         let odd = d % 2 == 1;
         let (source, target) = if odd {
             (&mut im.l_push, &mut im.l_in)
@@ -142,5 +143,9 @@ fn record(pipelines: &[Owned<vk::Pipeline>; 2], p: &Pass<'_>, res: &mut Resource
             range.end - range.start,
         );
         end_rendering(p.ctx, p.cmd);
+        // The odd depths added into the emulated float16 sums, which hold L_in.
+        if odd && res.plan.round_f16 {
+            crate::gpu::blend16::store(p.ctx, p.cmd, res);
+        }
     }
 }

@@ -18,6 +18,11 @@ pub struct GpuOptions {
     /// Accumulate L_in and L_push in the table format even where the device truncates
     /// float16 blending (by default such devices accumulate in float32; see [`GpuSolver::fallbacks`]).
     pub force_table_accumulation: bool,
+    /// Test-only: accumulate L_in and L_push in float32 rounded to the nearest float16 at every
+    /// addition, in the shaders ([`crate::gpu::blend16`]): float16 tables' accumulation as a
+    /// device that rounds its float16 blending performs it, on any device (lavapipe's
+    /// truncates). Ignored for float32 tables; needs `fragmentStoresAndAtomics`.
+    pub emulate_f16_rounding: bool,
     /// What to compute and allocate (a scene's [`crate::plan::Plan`]); `None`:
     /// [`Features::for_system`] (the system's local passes, antiradiance and every source on).
     pub features: Option<Features>,
@@ -33,6 +38,7 @@ impl Default for GpuOptions {
             column_height: None,
             max_line_width: None,
             force_table_accumulation: false,
+            emulate_f16_rounding: false,
             features: None,
             link_range: None,
         }

@@ -113,6 +113,7 @@ impl GpuBackend {
                 column_height: tuning.column_height,
                 max_line_width: None,
                 force_table_accumulation: tuning.force_table_accumulation,
+                emulate_f16_rounding: tuning.emulate_f16_rounding,
                 features: Some(prep.plan.features),
                 link_range: tuning.link_range,
             },
