@@ -148,7 +148,7 @@ layout(push_constant) uniform PassConstants {
     float omega;
     uint flags;
     uint sender;       // global pass: the I_ex image of the draw's senders (AR_SENDER_*)
-    uint pad;
+    float keep;        // local pass: the last iterate's weight in a damped iteration (0: none)
     vec4 environment;  // rgb: environment radiance (scaled); a: source scale (a power of two)
 } pc;
 

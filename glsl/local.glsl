@@ -108,6 +108,11 @@ void ar_local() {
             ex = -(a * c * -cj) * ar_lt(row, j, odd);
         }
     }
+    // A damped symmetric iteration (src/solver/mod.rs CpuState::damping) keeps part of the last
+    // iterate; pull then sums the damped leaves, as the CPU damps every row.
+    if (pc.keep != 0.0) {
+        ex = mix(ex, old, pc.keep);
+    }
     out_ex = vec4(ar_store(ex), 0.0);
     out_total = vec4(ar_store(tot), 0.0);
 }

@@ -40,6 +40,12 @@ pub trait Solve {
         antiradiance_steps: usize,
         n: usize,
     ) -> Result<Vec<Figures>>;
+    /// Damps the symmetric scheme's iterations from now on: each new iterate weighted by
+    /// `weight` against the last ([`crate::solver::CpuState::damping`]); false where the
+    /// method has no such iteration.
+    fn damp(&mut self, _weight: f64) -> bool {
+        false
+    }
     /// The current I_ex (unscaled).
     fn i_ex(&mut self) -> Result<Table>;
     /// The current display intensity I_total (unscaled).

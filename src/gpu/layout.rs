@@ -21,8 +21,9 @@ pub struct PassConstants {
     /// Global pass: the I_ex image the draw's senders live in
     /// ([`super::tables::sender_image`]); zero elsewhere.
     pub sender: u32,
-    /// Unused (keeps `environment` 16-byte aligned).
-    pub pad: u32,
+    /// Local pass: weight of the last iterate in the new one (`1 − ω` of a damped symmetric
+    /// iteration, [`crate::solver::CpuState::damping`]); 0 undamped.
+    pub keep: f32,
     /// Constant environment radiance times the source scale (rgb); the source scale (a), a
     /// power of two that every emitted radiance is multiplied by to centre values in float16's range.
     pub environment: [f32; 4],

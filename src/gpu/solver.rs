@@ -77,6 +77,8 @@ pub struct GpuSolver {
     reducer: Reducer,
     work: super::work::Work,
     setup: SetupTimes,
+    /// Weight of a symmetric iteration's new iterate ([`crate::solver::CpuState::damping`]).
+    damping: f64,
 }
 
 /// Which tables hold values a new source scale must rescale.
@@ -220,6 +222,7 @@ impl GpuSolver {
             reducer,
             work,
             setup,
+            damping: 1.0,
         })
         .and_then(|mut s| {
             s.update_scale()?;
@@ -409,6 +412,11 @@ impl GpuSolver {
         *parity = 1 - cur;
     }
 
+    /// Damps the symmetric iterations from now on ([`crate::solver::CpuState::damping`]).
+    pub fn set_damping(&mut self, weight: f64) {
+        self.damping = weight;
+    }
+
     /// Records one iteration of `scheme` (as [`crate::solver::CpuSolver::iterate`]).
     pub fn record_iteration(
         &mut self,
@@ -417,7 +425,13 @@ impl GpuSolver {
         antiradiance_steps: usize,
     ) -> Result<()> {
         match scheme {
-            Scheme::Symmetric => self.record_propagation(cmd, LocalMode::Both),
+            Scheme::Symmetric => {
+                // A damped iteration keeps 1 − ω of the last iterate (CpuState::damping).
+                self.constants.keep = (1.0 - self.damping) as f32;
+                let r = self.record_propagation(cmd, LocalMode::Both);
+                self.constants.keep = 0.0;
+                r
+            }
             Scheme::Asymmetric => {
                 self.record_propagation(cmd, LocalMode::Reflect)?;
                 // Without antiradiance its steps would change nothing (as in the CPU solver).

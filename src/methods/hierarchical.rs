@@ -113,6 +113,9 @@ impl Solve for HierarchicalBackend {
         self.inner
             .iterate_batch(prep, scheme, antiradiance_steps, n)
     }
+    fn damp(&mut self, weight: f64) -> bool {
+        self.inner.damp(weight)
+    }
     fn i_ex(&mut self) -> Result<Table> {
         self.inner.i_ex()
     }

@@ -99,6 +99,11 @@ pub struct CpuState {
     /// Whether emission enters the bins ([`crate::plan::Features::emission`]): off where the
     /// area emitters' light comes from shadow-mapped samples as direct light (§3.3).
     pub emission: bool,
+    /// Weight ω of a symmetric iteration's new iterate: `I_ex ← I_ex + ω (F(I_ex) − I_ex)`
+    /// (1: the plain iteration). Damping keeps the fixed point and turns an eigenvalue λ of
+    /// the iteration into `1 − ω(1 − λ)`: a scene whose antiradiance overshoots in alternating
+    /// sign (λ < −1, a deep stack of boards) converges with ω < 2/(1 − λ).
+    pub damping: f64,
 }
 
 impl CpuState {
@@ -148,6 +153,7 @@ impl CpuState {
             propagations: 0,
             antiradiance: true,
             emission: true,
+            damping: 1.0,
         }
     }
 }
@@ -237,7 +243,16 @@ impl<'a> CpuSolver<'a> {
     pub fn iterate(&mut self, scheme: Scheme, antiradiance_steps: usize) {
         let before = self.i_ex.clone();
         match scheme {
-            Scheme::Symmetric => self.propagate(LocalMode::Both),
+            Scheme::Symmetric => {
+                self.propagate(LocalMode::Both);
+                let w = self.damping;
+                if w != 1.0 {
+                    // Clusters too: pull is linear, so this is the pull of the damped leaves.
+                    for (x, b) in self.state.i_ex.data.iter_mut().zip(&before.data) {
+                        *x = *b + (*x - *b) * w;
+                    }
+                }
+            }
             Scheme::Asymmetric => {
                 self.propagate(LocalMode::Reflect);
                 let steps = if self.antiradiance {

@@ -38,7 +38,7 @@ fn push_constants_match_glsl() {
             "omega",
             "flags",
             "sender",
-            "pad",
+            "keep",
             "environment"
         ]
     );

@@ -114,6 +114,10 @@ impl Solve for CpuBackend {
     fn resumable(&self) -> bool {
         true
     }
+    fn damp(&mut self, weight: f64) -> bool {
+        self.state.as_mut().expect("state present").damping = weight;
+        true
+    }
     fn warm_start(&mut self, _: &Prepared, i_ex: &Table) -> Result<()> {
         let state = self.state.as_mut().expect("state present");
         state.i_ex = i_ex.clone();

@@ -303,6 +303,10 @@ impl Solve for GpuBackend {
     fn resumable(&self) -> bool {
         true
     }
+    fn damp(&mut self, weight: f64) -> bool {
+        self.solver.set_damping(weight);
+        true
+    }
     fn warm_start(&mut self, prep: &Prepared, i_ex: &Table) -> Result<()> {
         self.solver.upload_i_ex(&prep.system, i_ex)
     }
