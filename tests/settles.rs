@@ -196,5 +196,10 @@ fn a_deep_stack_of_boards_settles_damped() {
         );
         assert!(err < 5e-4, "{backend}: {err:.2e} from the tight solve");
         assert!(s.iterations <= 64, "{backend}: {} iterations", s.iterations);
+        if backend == Backend::Cpu {
+            record("settles.stack.iterations", s.iterations as f64, 0.0);
+            record("settles.stack.error", err, 0.05);
+            record("settles.stack.estimate", e, 0.05);
+        }
     }
 }
