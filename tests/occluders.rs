@@ -105,9 +105,10 @@ fn thin_wall_and_ten_layers_leak_within_bounds() {
 
 /// Slabs spanning a closed room wall to wall (their sides lie in the walls' planes, contact
 /// along every edge). Two slabs: the symmetric scheme grows, the loop notices, says so and
-/// restarts with the asymmetric scheme, which converges. Ten staggered slabs: the discrete system
-/// has an eigenvalue above one and both schemes grow; the loop keeps the iterate closest to
-/// convergence, says so, and still hands out a finite image.
+/// restarts with the asymmetric scheme, which converges. Ten staggered slabs: both schemes grow
+/// (the plain symmetric iteration about 4.9× per iteration, alternating in sign); the loop says
+/// so and restarts with the symmetric scheme damped (ω = 0.25), which contracts: measured residual
+/// 9.65e-3 after its 30 iterations, never growing, and a finite image.
 #[test]
 fn divergence_is_detected_reported_and_never_reaches_the_image() {
     let build = |layers: usize, staggered: bool| {
@@ -173,5 +174,9 @@ fn divergence_is_detected_reported_and_never_reaches_the_image() {
         f.contains("asymmetric scheme does not converge either"),
         "{f}"
     );
+    assert!(f.contains("symmetric scheme damped"), "{f}");
+    assert!(!f.contains("kept iteration"), "{f}");
+    let last = *r.stats.residuals.last().unwrap();
+    assert!(last < 2e-2, "{:?}", r.stats.residuals);
     assert!(r.stats.energies.iter().all(|e| e.is_finite()));
 }
