@@ -2,6 +2,7 @@
 //! settings. `format` is the TOML on disk, `load` turns it into a validated [`Scene`].
 
 pub mod animation;
+mod bare;
 mod files;
 pub mod format;
 pub mod gltf_scene;
