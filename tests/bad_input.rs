@@ -58,6 +58,30 @@ fn missing_mesh_file() {
     expect_error(&p, &["s.toml", "nothere.obj"]);
 }
 
+/// A bare OBJ or PLY given as the scene: malformed, empty, missing or a directory, one line
+/// naming the file.
+#[test]
+fn malformed_bare_meshes() {
+    let d = dir("bare");
+    let p = write(&d, "m.obj", "v 0 0 0\nv 1 0 zero\nf 1 2 3\n");
+    expect_error(&p, &["m.obj"]);
+    let p = write(&d, "r.obj", "v 0 0 0\nv 1 0 0\nf 1 2 9\n");
+    expect_error(&p, &["r.obj"]);
+    let p = write(&d, "e.obj", "");
+    expect_error(&p, &["e.obj", "no faces"]);
+    expect_error(&d.join("missing.obj"), &["missing.obj", "not found"]);
+    let p = write(&d, "h.ply", "ply\nformat ascii 1.0\nelement vertex 1\n");
+    expect_error(&p, &["h.ply"]);
+    let p = write(
+        &d,
+        "i.ply",
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n",
+    );
+    expect_error(&p, &["i.ply"]);
+    std::fs::create_dir_all(d.join("dir.ply")).unwrap();
+    expect_error(&d.join("dir.ply"), &["dir.ply", "directory"]);
+}
+
 #[test]
 fn malformed_obj() {
     let d = dir("obj");

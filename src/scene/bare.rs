@@ -1,5 +1,6 @@
-//! A bare OBJ file as a scene (`antiradiance render model.obj`): the mesh placed as it is, with
-//! its MTL, at the default solver settings, seen from a camera that frames it. An OBJ carries no
+//! A bare OBJ or PLY file as a scene (`antiradiance render model.obj`): the mesh placed as it is,
+//! with its MTL (a PLY: grey diffuse, as Mitsuba loads one without a BSDF), at the default solver
+//! settings, seen from a camera that frames it. Such a file carries no
 //! camera and no lights, so the view is chosen here and a file with no emitting material (`Ke`)
 //! gets a light so that the image is not black (a sun over a view from outside, a point light at
 //! the eye of a view from inside); each choice is one warning. The view: from outside
@@ -13,15 +14,15 @@ use crate::error::Result;
 use glam::DVec3;
 use std::path::Path;
 
-/// Whether `path` names an OBJ file.
-pub fn is_obj(path: &Path) -> bool {
+/// Whether `path` names an OBJ or PLY file.
+pub fn is_bare_mesh(path: &Path) -> bool {
     path.extension()
         .and_then(|e| e.to_str())
-        .is_some_and(|e| e.eq_ignore_ascii_case("obj"))
+        .is_some_and(|e| e.eq_ignore_ascii_case("obj") || e.eq_ignore_ascii_case("ply"))
 }
 
-/// The scene of the OBJ file at `path` (see the module's documentation).
-pub fn load_obj_scene(path: &Path) -> Result<Scene> {
+/// The scene of the OBJ or PLY file at `path` (see the module's documentation).
+pub fn load_mesh_scene(path: &Path) -> Result<Scene> {
     // A missing or unreadable file is named as the scene file, as a TOML scene's would be.
     if let Err(super::files::FileProblem::Path(m) | super::files::FileProblem::Content(m)) =
         super::files::check_regular_file(path)
@@ -33,14 +34,29 @@ pub fn load_obj_scene(path: &Path) -> Result<Scene> {
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
     // One object whose mesh is the file itself (mesh paths are relative to the scene file): the
-    // TOML scene's loading, checks and messages unchanged.
-    let text = format!("[[object]]\nmesh = {}\n", toml::Value::String(name.clone()));
-    let mut scene = super::load::parse_scene(&text, path)?;
+    // TOML scene's loading of an OBJ, a Mitsuba scene's of a PLY shape, checks and messages
+    // unchanged.
+    let ply = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("ply"));
+    let mut scene = if ply {
+        let escaped = name
+            .replace('&', "&amp;")
+            .replace('"', "&quot;")
+            .replace('<', "&lt;");
+        let text = format!(
+            "<scene version=\"3.0.0\"><shape type=\"ply\"><string name=\"filename\" value=\"{escaped}\"/></shape></scene>"
+        );
+        super::mitsuba::parse_mitsuba_scene(&text, path)?
+    } else {
+        let text = format!("[[object]]\nmesh = {}\n", toml::Value::String(name.clone()));
+        super::load::parse_scene(&text, path)?
+    };
     let (eye, target) = view(&scene);
     scene.camera.eye = eye;
     scene.camera.target = target;
     scene.warnings.push(format!(
-        "{}: an OBJ file has no camera: looking from [{:.3}, {:.3}, {:.3}] toward [{:.3}, {:.3}, {:.3}] (place it in a TOML scene with a [camera] to choose)",
+        "{}: a mesh file has no camera: looking from [{:.3}, {:.3}, {:.3}] toward [{:.3}, {:.3}, {:.3}] (place it in a TOML scene with a [camera] to choose)",
         path.display(),
         eye.x,
         eye.y,
@@ -83,7 +99,7 @@ pub fn load_obj_scene(path: &Path) -> Result<Scene> {
         };
         scene.lights.push(light);
         scene.warnings.push(format!(
-            "{}: no material emits (Ke) and an OBJ file has no lights: added {what} (place it in a TOML scene with [[light]]s to choose)",
+            "{}: no material emits (Ke) and a mesh file has no lights: added {what} (place it in a TOML scene with [[light]]s to choose)",
             path.display()
         ));
     }
@@ -243,6 +259,27 @@ mod sun_tests {
             "{:?}",
             s.warnings
         );
+    }
+
+    /// A PLY file (ASCII here; binary goes through the same parser as Mitsuba's ply shapes) is
+    /// a scene too: grey diffuse, framed from +z, lit by the sun.
+    #[test]
+    fn a_ply_file_is_a_scene() {
+        let text = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n";
+        let dir =
+            std::env::temp_dir().join(format!("antiradiance-bare-ply-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("quad.ply");
+        std::fs::write(&path, text).unwrap();
+        let s = super::super::load_scene(&path).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(s.meshes.iter().map(|m| m.triangles.len()).sum::<usize>(), 2);
+        assert!(s.materials.iter().all(|m| !m.is_emitter()));
+        assert!(s.camera.eye.z > 1.0, "{:?}", s.camera.eye);
+        assert!(matches!(
+            s.lights[..],
+            [crate::scene::Light::Directional { .. }]
+        ));
     }
 
     /// A closed room (faces turned inward) is seen from its centre, not from outside, where

@@ -27,8 +27,8 @@ pub fn load_scene(path: &Path) -> Result<Scene> {
     {
         return super::mitsuba::load_mitsuba_scene(path);
     }
-    if super::bare::is_obj(path) {
-        return super::bare::load_obj_scene(path);
+    if super::bare::is_bare_mesh(path) {
+        return super::bare::load_mesh_scene(path);
     }
     let text = files::read_text(path, "scene").map_err(|p| match p {
         FileProblem::Path(m) => scene_err(path, format!("scene file {m}")),

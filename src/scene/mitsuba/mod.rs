@@ -29,6 +29,11 @@ pub use materials::GLASS_EXPONENT;
 pub fn load_mitsuba_scene(path: &Path) -> Result<Scene> {
     let text = super::files::read_text(path, "Mitsuba XML")
         .map_err(|p| scene_err(path, format!("scene file {p}")))?;
+    parse_mitsuba_scene(&text, path)
+}
+
+/// Parses Mitsuba XML text as if it had been read from `path` (messages, relative paths).
+pub fn parse_mitsuba_scene(text: &str, path: &Path) -> Result<Scene> {
     let doc = roxmltree::Document::parse(&text)
         .map_err(|e| scene_err(path, format!("not well-formed XML: {e}")))?;
     let root = doc.root_element();
