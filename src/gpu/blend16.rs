@@ -41,8 +41,12 @@ pub fn clear(ctx: &Context, cmd: vk::CommandBuffer, res: &Resources) {
         vk::PipelineStageFlags2::CLEAR | vk::PipelineStageFlags2::COPY,
         vk::AccessFlags2::TRANSFER_READ | vk::AccessFlags2::TRANSFER_WRITE,
     );
-    // The last iteration's copy out of the buffer, and its shader adds, come first.
-    barrier(ctx, cmd, FRAGMENT, transfer);
+    // The last iteration's shader adds and its copies out of the buffer come first.
+    let before = (
+        FRAGMENT.0 | vk::PipelineStageFlags2::COPY,
+        FRAGMENT.1 | vk::AccessFlags2::TRANSFER_READ,
+    );
+    barrier(ctx, cmd, before, transfer);
     unsafe {
         ctx.device
             .cmd_fill_buffer(cmd, res.buffers.rounded.raw, 0, vk::WHOLE_SIZE, 0)
