@@ -85,10 +85,11 @@ pub(crate) fn drive(
     // The symmetric scheme's growth per iteration where it diverged, and the damping in use.
     let mut symmetric_growth: Option<f64> = None;
     let mut damping: Option<f64> = None;
-    solver.damp(1.0);
     let mut tail: Tail;
     progress.begin("iterations", monitor.limit as u64);
     'run: loop {
+        // Every run states its damping (a widened solver is a new one).
+        solver.damp(damping.unwrap_or(1.0));
         solver.initialize(prep)?;
         if std::mem::take(&mut first) {
             initialized();
