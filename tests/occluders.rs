@@ -104,11 +104,11 @@ fn thin_wall_and_ten_layers_leak_within_bounds() {
 }
 
 /// Slabs spanning a closed room wall to wall (their sides lie in the walls' planes, contact
-/// along every edge). Two slabs: the symmetric scheme grows, the loop notices, says so and
-/// restarts with the asymmetric scheme, which converges. Ten staggered slabs: both schemes grow
-/// (the plain symmetric iteration about 4.9× per iteration, alternating in sign); the loop says
-/// so and restarts with the symmetric scheme damped (ω = 0.25), which contracts: measured residual
-/// 9.65e-3 after its 30 iterations, never growing, and a finite image.
+/// along every edge). Two slabs: the symmetric scheme grows (1.8× per iteration, alternating in
+/// sign), the loop notices, says so and restarts it damped (ω = 0.54), which converges
+/// (measured residual 2.43e-3 after its 27 iterations). Ten staggered slabs: the plain scheme
+/// grows 4.9× per iteration; damped (ω = 0.25) it contracts (residual 9.65e-3 after 30
+/// iterations, never growing), and the image is finite.
 #[test]
 fn divergence_is_detected_reported_and_never_reaches_the_image() {
     let build = |layers: usize, staggered: bool| {
@@ -156,8 +156,12 @@ fn divergence_is_detected_reported_and_never_reaches_the_image() {
     let r = render_with("two wall-to-wall slabs", &build(2, false), Backend::Cpu);
     let f = r.stats.fallbacks.join(" | ");
     assert!(f.contains("symmetric scheme does not converge"), "{f}");
+    assert!(
+        f.contains("restarted with the symmetric scheme damped"),
+        "{f}"
+    );
     assert!(!f.contains("either"), "{f}");
-    assert_eq!(r.stats.scheme, antiradiance::Scheme::Asymmetric);
+    assert_eq!(r.stats.scheme, antiradiance::Scheme::Symmetric);
     let last = *r.stats.residuals.last().unwrap();
     assert!(
         last < 1e-2 && last < r.stats.residuals[0] / 100.0,
@@ -170,10 +174,6 @@ fn divergence_is_detected_reported_and_never_reaches_the_image() {
     let r = render_with("ten staggered wall-to-wall slabs", &s, Backend::Cpu);
     let f = r.stats.fallbacks.join(" | ");
     assert!(f.contains("symmetric scheme does not converge"), "{f}");
-    assert!(
-        f.contains("asymmetric scheme does not converge either"),
-        "{f}"
-    );
     assert!(f.contains("symmetric scheme damped"), "{f}");
     assert!(!f.contains("kept iteration"), "{f}");
     let last = *r.stats.residuals.last().unwrap();

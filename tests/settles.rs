@@ -151,20 +151,23 @@ fn settles(
     }
 }
 
-/// The court with two boards: the symmetric scheme stalls, the monitor switches to the
-/// asymmetric scheme (measured: 12 iterations, estimate 3.8e-4, image 1.73e-4 from the tight
-/// solve on both backends).
+/// The court with two boards: the symmetric scheme stalls (its change alternates in sign), the
+/// monitor restarts it damped (ω = 0.75; measured: 16 iterations, estimate 4.8e-4, image
+/// 1.58e-4 from the tight solve; the asymmetric scheme took 12 iterations of five propagations
+/// each, estimate 3.8e-4, image 1.73e-4).
 #[test]
 fn an_open_court_under_sun_and_sky_settles_to_its_tolerance() {
     settles("court", &court(), "settles", 0.02, |backend, s| {
+        let f = s.fallbacks.join(" | ");
         assert!(
-            s.fallbacks
-                .iter()
-                .any(|f| f.contains("symmetric scheme does not converge")),
-            "{backend}: {:?}",
-            s.fallbacks
+            f.contains("the symmetric scheme does not converge here"),
+            "{backend}: {f}"
         );
-        assert_eq!(s.scheme, Scheme::Asymmetric, "{backend}");
+        assert!(
+            f.contains("restarted with the symmetric scheme damped"),
+            "{backend}: {f}"
+        );
+        assert_eq!(s.scheme, Scheme::Symmetric, "{backend}");
         // The residual fell by orders of magnitude from the first iteration to the last.
         let (first, last) = (s.residuals[0], *s.residuals.last().unwrap());
         assert!(
@@ -175,19 +178,16 @@ fn an_open_court_under_sun_and_sky_settles_to_its_tolerance() {
 }
 
 /// Eight boards 0.1 apart: both schemes grow (the change alternates in sign, ratios near −2.96
-/// symmetric and −1.86 asymmetric), so the monitor restarts a third time with the symmetric
-/// scheme damped, which must settle to the tolerance on both backends (measured: 32 damped
-/// iterations at ω = 0.38, estimate 7.8e-4, image 2.05e-4 / 2.04e-4 from the tight solve).
+/// symmetric and −1.86 asymmetric); the monitor restarts the symmetric scheme damped, which
+/// must settle to the tolerance on both backends (measured: 32 damped iterations at ω = 0.38,
+/// estimate 7.8e-4, image 2.05e-4 / 2.04e-4 from the tight solve).
 #[test]
 fn a_deep_stack_of_boards_settles_damped() {
     let scene = court_with_boards(8, 0.1);
     settles("stack", &scene, "settles.stack", 0.05, |backend, s| {
         let f = s.fallbacks.join(" | ");
-        assert!(
-            f.contains("asymmetric scheme does not converge either"),
-            "{backend}: {f}"
-        );
         assert!(f.contains("symmetric scheme damped"), "{backend}: {f}");
+        assert!(!f.contains("asymmetric"), "{backend}: {f}");
         assert!(!f.contains("kept iteration"), "{backend}: {f}");
         assert!(s.iterations <= 64, "{backend}: {} iterations", s.iterations);
     });

@@ -1,8 +1,8 @@
 //! The iteration loop shared by both backends: the convergence monitor decides when to stop,
 //! and every departure from the requested run is a fallback with its reason: the symmetric
-//! scheme growing (restart with the asymmetric one), float16 overflowing (restart in float32),
-//! both schemes growing (restart with the symmetric scheme damped), all three growing (keep the
-//! iterate before growth). Nothing non-finite is handed on.
+//! scheme growing (restart it damped; growing damped, restart with the asymmetric scheme),
+//! float16 overflowing (restart in float32), every scheme growing (keep the iterate before
+//! growth). Nothing non-finite is handed on.
 
 use super::tail::{Checked, Tail};
 use crate::backend::{Backend, Prepared};
@@ -53,10 +53,12 @@ fn growth(changes: &[f64]) -> Option<f64> {
 }
 
 /// Weight ω of the damped symmetric iteration after the plain one grew by `g` per iteration.
-/// Antiradiance that overshoots does so in alternating sign (measured on a stack of eight
-/// boards: the change's ratio between iterations −2.96 symmetric, −1.86 asymmetric), an
-/// eigenvalue λ ≈ −g, which damping maps to 1 − ω(1 + g): ω = 1.5/(1 + g) puts it at −0.5
-/// (within 0.1..=0.75; a stall, g ≈ 1, gets 0.75).
+/// Antiradiance that overshoots does so in alternating sign (the change's ratio between
+/// iterations on a stack of eight boards −2.96 symmetric, −1.86 asymmetric; on the breakfast
+/// room −1.30 symmetric, −0.92 asymmetric), an eigenvalue λ ≈ −g, which damping maps to
+/// 1 − ω(1 + g): ω = 1.5/(1 + g) puts it at −0.5 (within 0.1..=0.75; a stall, g ≈ 1, gets 0.75).
+/// On the breakfast room 16 damped iterations at ω = 0.6 left a change of 9.2e-3 where 16
+/// asymmetric ones, each four times the work, left 5.3e-2 (docs/measurements.md).
 pub(crate) fn damping_for(g: f64) -> f64 {
     (1.5 / (1.0 + g.max(1.0))).clamp(0.1, 0.75)
 }
@@ -82,9 +84,9 @@ pub(crate) fn drive(
     let batch = if every_iteration { 1 } else { BATCH };
     // Iterations to run without judging, after both schemes grew: the best iterate is re-run.
     let mut replay: Option<usize> = None;
-    // The symmetric scheme's growth per iteration where it diverged, and the damping in use.
-    let mut symmetric_growth: Option<f64> = None;
+    // The damping in use, and whether damping was tried (it is tried once).
     let mut damping: Option<f64> = None;
+    let mut damped_once = false;
     let mut tail: Tail;
     progress.begin("iterations", monitor.limit as u64);
     'run: loop {
@@ -151,23 +153,23 @@ pub(crate) fn drive(
                     frame(k, solver)?;
                     break 'run;
                 }
-                Some(Verdict::Diverging(why))
-                    if scheme == Scheme::Symmetric && damping.is_none() =>
-                {
-                    symmetric_growth = growth(&monitor.changes);
-                    out.fallbacks.push(format!(
-                        "the symmetric scheme does not converge here ({why}); restarted with the asymmetric scheme"
-                    ));
-                    scheme = Scheme::Asymmetric;
-                    continue 'run;
-                }
-                Some(Verdict::Diverging(why)) if damping.is_none() && replay.is_none() => {
-                    // Damping keeps the fixed point and contracts an alternating overshoot.
-                    let g = symmetric_growth.unwrap_or(3.0);
+                Some(Verdict::Diverging(why)) if replay.is_none() && !damped_once => {
+                    // Damping keeps the fixed point and contracts an alternating overshoot:
+                    // first remedy (measured cheaper than the asymmetric scheme, see
+                    // `damping_for`), from whichever scheme grew.
+                    let plain = scheme == Scheme::Symmetric;
+                    let g = if plain {
+                        growth(&monitor.changes)
+                    } else {
+                        None
+                    };
+                    let g = g.unwrap_or(3.0);
                     let w = damping_for(g);
+                    damped_once = true;
                     if solver.damp(w) {
+                        let which = if plain { "symmetric" } else { "asymmetric" };
                         out.fallbacks.push(format!(
-                            "the asymmetric scheme does not converge either ({why}); restarted with the symmetric scheme damped: each iterate {w:.2} of the new and {:.2} of the last (the plain symmetric iteration grew about {g:.2}× per iteration; damped, an eigenvalue of −{g:.2} becomes {:+.2})",
+                            "the {which} scheme does not converge here ({why}); restarted with the symmetric scheme damped: each iterate {w:.2} of the new and {:.2} of the last (the plain iteration grew about {g:.2}× per iteration; damped, an eigenvalue of −{g:.2} becomes {:+.2})",
                             1.0 - w,
                             1.0 - w * (1.0 + g)
                         ));
@@ -175,7 +177,25 @@ pub(crate) fn drive(
                         scheme = Scheme::Symmetric;
                         continue 'run;
                     }
+                    if plain {
+                        out.fallbacks.push(format!(
+                            "the symmetric scheme does not converge here ({why}); restarted with the asymmetric scheme"
+                        ));
+                        scheme = Scheme::Asymmetric;
+                        continue 'run;
+                    }
                     keep_best(&mut out, &monitor, &why, &mut replay);
+                    continue 'run;
+                }
+                Some(Verdict::Diverging(why))
+                    if replay.is_none() && scheme == Scheme::Symmetric =>
+                {
+                    // The damped scheme grew too: the asymmetric one, undamped.
+                    out.fallbacks.push(format!(
+                        "the damped symmetric scheme does not converge either ({why}); restarted with the asymmetric scheme"
+                    ));
+                    damping = None;
+                    scheme = Scheme::Asymmetric;
                     continue 'run;
                 }
                 Some(Verdict::Diverging(why)) => {
