@@ -184,13 +184,7 @@ pub fn leaf_lower_bound(longest: f64, area: f64, size: f64) -> f64 {
 /// share of the largest cluster's area.
 pub fn estimate_elements(scene: &Scene, size: f64) -> f64 {
     scene
-        .meshes
-        .iter()
-        .flat_map(|m| {
-            m.triangles
-                .iter()
-                .map(|t| t.map(|v| m.positions[v as usize]))
-        })
+        .triangle_corners()
         .map(|[a, b, c]| {
             let longest = (b - a).length().max((c - b).length()).max((a - c).length());
             let area = 0.5 * (b - a).cross(c - a).length();

@@ -120,15 +120,7 @@ fn view(scene: &Scene) -> (DVec3, DVec3) {
     let axes = [DVec3::Z, DVec3::X, -DVec3::Z, -DVec3::X];
     let outside = axes.map(|a| (centre + a * distance, centre));
     let inside = axes.map(|a| (centre, centre - a * radius));
-    let triangles: Vec<[DVec3; 3]> = scene
-        .meshes
-        .iter()
-        .flat_map(|m| {
-            m.triangles
-                .iter()
-                .map(|t| t.map(|v| m.positions[v as usize]))
-        })
-        .collect();
+    let triangles: Vec<[DVec3; 3]> = scene.triangle_corners().collect();
     let score = |v| front_and_back_hits(v, half, &triangles);
     let best = |views: [(DVec3, DVec3); 4], key: &dyn Fn((usize, usize)) -> i64| {
         let scored = views.map(|v| (v, score(v)));

@@ -450,6 +450,15 @@ impl Scene {
         self.meshes.iter().map(|m| m.triangles.len()).sum()
     }
 
+    /// Every triangle's corners (world space), mesh by mesh.
+    pub fn triangle_corners(&self) -> impl Iterator<Item = [DVec3; 3]> + '_ {
+        self.meshes.iter().flat_map(|m| {
+            m.triangles
+                .iter()
+                .map(|t| t.map(|v| m.positions[v as usize]))
+        })
+    }
+
     /// Axis-aligned bounds of all vertices.
     pub fn bounds(&self) -> (DVec3, DVec3) {
         let mut lo = DVec3::splat(f64::INFINITY);
