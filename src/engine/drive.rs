@@ -158,20 +158,24 @@ pub(crate) fn drive(
                     // first remedy (measured cheaper than the asymmetric scheme, see
                     // `damping_for`), from whichever scheme grew.
                     let plain = scheme == Scheme::Symmetric;
-                    let g = if plain {
-                        growth(&monitor.changes)
-                    } else {
-                        None
-                    };
-                    let g = g.unwrap_or(3.0);
+                    let which = if plain { "symmetric" } else { "asymmetric" };
+                    // The growth of the scheme that grew (a stall measures about 1); with too
+                    // few changes to tell, 3 (ω = 0.375).
+                    let measured = growth(&monitor.changes);
+                    let g = measured.unwrap_or(3.0);
                     let w = damping_for(g);
                     damped_once = true;
                     if solver.damp(w) {
-                        let which = if plain { "symmetric" } else { "asymmetric" };
+                        let grew = match measured {
+                            Some(g) => format!(
+                                "the {which} iteration grew about {g:.2}× per iteration; damped, an eigenvalue of −{g:.2} becomes {:+.2}",
+                                1.0 - w * (1.0 + g)
+                            ),
+                            None => "its growth was not measured".to_string(),
+                        };
                         out.fallbacks.push(format!(
-                            "the {which} scheme does not converge here ({why}); restarted with the symmetric scheme damped: each iterate {w:.2} of the new and {:.2} of the last (the plain iteration grew about {g:.2}× per iteration; damped, an eigenvalue of −{g:.2} becomes {:+.2})",
-                            1.0 - w,
-                            1.0 - w * (1.0 + g)
+                            "the {which} scheme does not converge here ({why}); restarted with the symmetric scheme damped: each iterate {w:.2} of the new and {:.2} of the last ({grew})",
+                            1.0 - w
                         ));
                         damping = Some(w);
                         scheme = Scheme::Symmetric;
