@@ -145,6 +145,9 @@ pub enum Method {
     /// Instant radiosity (Keller 1997): virtual point lights traced from the lights, gathered
     /// per pixel through their shadow maps.
     InstantRadiosity,
+    /// The image-based radiosity representation: instant radiosity's VPLs accumulated through
+    /// hemicubes into a view-independent layered depth cube, read per pixel.
+    ImageBasedRadiosity,
 }
 spelled!(
     Method,
@@ -153,17 +156,19 @@ spelled!(
         (Antiradiance, "antiradiance"),
         (HierarchicalRadiosity, "hierarchical-radiosity"),
         (ProgressiveRadiosity, "progressive-radiosity"),
-        (InstantRadiosity, "instant-radiosity")
+        (InstantRadiosity, "instant-radiosity"),
+        (ImageBasedRadiosity, "image-based-radiosity")
     ]
 );
 
 impl Method {
     /// Every method, in the order reports list them.
-    pub const ALL: [Method; 4] = [
+    pub const ALL: [Method; 5] = [
         Method::Antiradiance,
         Method::HierarchicalRadiosity,
         Method::ProgressiveRadiosity,
         Method::InstantRadiosity,
+        Method::ImageBasedRadiosity,
     ];
 
     /// Whether the method solves on the links (progressive refinement computes its form
@@ -172,7 +177,7 @@ impl Method {
     pub fn uses_links(self) -> bool {
         !matches!(
             self,
-            Method::ProgressiveRadiosity | Method::InstantRadiosity
+            Method::ProgressiveRadiosity | Method::InstantRadiosity | Method::ImageBasedRadiosity
         )
     }
 

@@ -31,6 +31,9 @@ pub struct MethodSettings {
     /// Instant radiosity: the clamp's disc area in units of the scene's surface area per VPL
     /// (0: no clamp, the bare `1/r²`).
     pub vpl_clamp: f64,
+    /// Image-based radiosity: cells of the layered depth cube along the scene's longest side
+    /// (its hemicubes are `hemicube` texels a side).
+    pub cube: u32,
 }
 
 impl Default for MethodSettings {
@@ -43,6 +46,7 @@ impl Default for MethodSettings {
             shots_per_iteration: None,
             vpls: DEFAULT_VPLS,
             vpl_clamp: DEFAULT_VPL_CLAMP,
+            cube: DEFAULT_CUBE,
         }
     }
 }
@@ -50,6 +54,10 @@ impl Default for MethodSettings {
 /// Default light paths of instant radiosity (README, "Instant radiosity": chosen by
 /// measurement on the Cornell box).
 pub const DEFAULT_VPLS: u32 = 256;
+
+/// Default resolution of image-based radiosity's layered depth cube (cells along the longest
+/// side); the paper keeps the hemicubes' faces about as fine.
+pub const DEFAULT_CUBE: u32 = 128;
 
 /// Default clamp of instant radiosity: a VPL's disc is the surface area it stands for.
 pub const DEFAULT_VPL_CLAMP: f64 = 1.0;
@@ -108,6 +116,9 @@ impl MethodSettings {
                 "--vpl-clamp must be non-negative and finite, got {}",
                 self.vpl_clamp
             ));
+        }
+        if !(4..=2048).contains(&self.cube) {
+            return bad(format!("--cube must be 4..=2048, got {}", self.cube));
         }
         if let Some(0) = self.shots_per_iteration {
             return bad("--shots-per-iteration must be at least 1".into());

@@ -55,6 +55,16 @@ impl Prepared {
         i_total: &crate::solver::Table,
         caster: &crate::raycast::RayCaster,
     ) -> crate::frame::Image {
+        self.render_cpu_with(i_total, caster, None)
+    }
+
+    /// [`Self::render_cpu`] with the indirect light of `store` where one is given.
+    pub fn render_cpu_with(
+        &self,
+        i_total: &crate::solver::Table,
+        caster: &crate::raycast::RayCaster,
+        store: Option<&dyn crate::frame::cpu::SampleIndirect>,
+    ) -> crate::frame::Image {
         let lit = crate::frame::lights::LightSet {
             lights: &self.lights,
             maps: &self.maps,
@@ -68,6 +78,7 @@ impl Prepared {
             i_total,
             &self.surfaces,
             caster,
+            store,
         )
     }
 
@@ -155,14 +166,18 @@ impl Prepared {
     ) -> Result<Self> {
         // The analytic lights, then the area emitters' samples (§3.3).
         let mut lights = scene.lights.clone();
-        let emitter_choice = if options.method == Method::InstantRadiosity {
+        let vpl_method = matches!(
+            options.method,
+            Method::InstantRadiosity | Method::ImageBasedRadiosity
+        );
+        let emitter_choice = if vpl_method {
             // Instant radiosity has no bins to take emission: its emitters are always sampled.
             if settings.emitter_samples == Some(0) {
-                return Err(Error::Invalid(
-                    "instant-radiosity needs emitter samples (solver.emitter_samples = 0 sends \
-                     emission through the bins, which this method does not have)"
-                        .into(),
-                ));
+                return Err(Error::Invalid(format!(
+                    "{} needs emitter samples (solver.emitter_samples = 0 sends \
+                     emission through the bins, which this method does not have)",
+                    options.method
+                )));
             }
             emitters::choose(
                 scene,

@@ -136,7 +136,8 @@ pub struct BaselineArgs {
     /// hierarchical-radiosity: visibility rays per link.
     #[arg(long, default_value_t = antiradiance::methods::DEFAULT_RAYS_PER_LINK)]
     pub rays_per_link: u32,
-    /// progressive-radiosity: side of a hemicube face of the item buffer (texels).
+    /// progressive-radiosity: side of a hemicube face of the item buffer (texels);
+    /// image-based-radiosity: side of a VPL's hemicube face.
     #[arg(long, default_value_t = antiradiance::methods::DEFAULT_HEMICUBE)]
     pub hemicube: u32,
     /// progressive-radiosity: deepest adaptive subdivision of a receiver (0: its centroid; L:
@@ -158,6 +159,9 @@ pub struct BaselineArgs {
     /// surface area per VPL (0: the bare 1/r²).
     #[arg(long, default_value_t = antiradiance::methods::DEFAULT_VPL_CLAMP, value_parser = finite)]
     pub vpl_clamp: f64,
+    /// image-based-radiosity: cells of the layered depth cube along the scene's longest side.
+    #[arg(long, default_value_t = antiradiance::methods::DEFAULT_CUBE)]
+    pub cube: u32,
 }
 
 impl BaselineArgs {
@@ -171,6 +175,7 @@ impl BaselineArgs {
             shots_per_iteration: self.shots_per_iteration,
             vpls: self.vpls,
             vpl_clamp: self.vpl_clamp,
+            cube: self.cube,
         }
     }
 }

@@ -13,7 +13,7 @@ use super::surfaces::{
     display_bin, display_radiance_in, splat_weight, vertex_values, Surfaces, MODE_VERTEX,
 };
 use crate::raycast::RayCaster;
-use crate::scene::{Camera, Scene};
+use crate::scene::{Camera, Material, Scene};
 use crate::solver::Table;
 use crate::system::System;
 use glam::DVec3;
@@ -76,7 +76,16 @@ enum Seen {
     Front(Front),
 }
 
-/// Renders `camera`'s view of `scene` from the solved display intensities `i_total`.
+/// Indirect light per sample from a method's own view-independent store (image-based
+/// radiosity's cube) rather than from the elements' bins.
+pub trait SampleIndirect: Sync {
+    /// Radiance toward the eye at `p`, on a face of unit normal `n` and material `m`.
+    fn radiance(&self, p: DVec3, n: DVec3, m: &Material) -> DVec3;
+}
+
+/// Renders `camera`'s view of `scene` from the solved display intensities `i_total`, or with
+/// the indirect light of `store` where one is given.
+#[allow(clippy::too_many_arguments)]
 pub fn render(
     scene: &Scene,
     lit: &LightSet<'_>,
@@ -85,6 +94,7 @@ pub fn render(
     i_total: &Table,
     surf: &Surfaces,
     caster: &RayCaster,
+    store: Option<&dyn SampleIndirect>,
 ) -> Image {
     let (lights, maps) = (lit.lights, lit.maps);
     let view = View::new(camera);
@@ -133,7 +143,9 @@ pub fn render(
                             } else {
                                 (normal, normal, wo)
                             };
-                            let indirect = if surf.mode[li] == MODE_VERTEX {
+                            let indirect = if let Some(store) = store {
+                                store.radiance(p, normal, mat)
+                            } else if surf.mode[li] == MODE_VERTEX {
                                 let cv = surf.corner_vertex[li];
                                 verts[cv[0] as usize] * (1.0 - hit.u - hit.v)
                                     + verts[cv[1] as usize] * hit.u

@@ -9,6 +9,7 @@
 
 pub mod antiradiance;
 pub mod hierarchical;
+pub mod ibr;
 pub mod instant;
 pub mod progressive;
 pub mod visibility;
@@ -63,6 +64,13 @@ pub fn create(
                     Box::new(instant::backend::GpuInstant::new(gpu()?, prep, report)?)
                 }
             }
+        }
+        (Method::ImageBasedRadiosity, kind) => {
+            let ctx = match kind {
+                BackendKind::Cpu => None,
+                BackendKind::Gpu => Some(gpu()?),
+            };
+            Box::new(ibr::backend::ImageBased::new(prep, options.baseline, ctx)?)
         }
     })
 }

@@ -27,7 +27,7 @@ fn ms(t: Instant) -> f64 {
 }
 
 /// `n` iterations that change nothing (the VPLs' flux, mean of RGB, as the energy).
-fn idle_figures(report: &MethodReport, n: usize) -> Vec<Figures> {
+pub(crate) fn idle_figures(report: &MethodReport, n: usize) -> Vec<Figures> {
     let flux = report.figures.get("vpl_flux").copied().unwrap_or(0.0);
     vec![
         Figures {

@@ -1,0 +1,364 @@
+//! The layered depth cube (LDC) of the image-based radiosity representation: three layered depth
+//! images (LDIs) over the scene's bounds, one per axis, of square cells. A sample goes to the
+//! LDI whose axis is most parallel to its normal; in its cell it merges with a layer whose plane
+//! it lies on (`|p·n − d| < ε_d` and `n′·n > 1 − ε_n`, the paper's §3.1 plane test), or opens a
+//! new layer. Pure, device-free: both backends warp their hemicube samples through it.
+
+use glam::DVec3;
+
+/// Plane distance of the merge test, in cells (the paper's ε on `|p·n − d|`).
+pub const PLANE_EPSILON_CELLS: f64 = 0.5;
+/// Orientation part of the merge test: normals within about 25° share a layer.
+pub const NORMAL_EPSILON: f64 = 0.1;
+/// Most layers one cell keeps (a sample that would open another is dropped and counted).
+pub const MAX_LAYERS: usize = 32;
+
+/// One layer of a cell: a plane and the irradiance accumulated on it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Layer {
+    /// Unit normal of the plane (the first sample's).
+    pub normal: DVec3,
+    /// `p · normal` of the first sample.
+    pub d: f64,
+    /// Irradiance (W/m² per channel) summed over the virtual lights.
+    pub irradiance: DVec3,
+    /// The current light's samples in this layer: their sum, their count, and whether they are
+    /// the light's own samples (1) or splatted copies (2); 0 where the light has none.
+    sum: DVec3,
+    count: u32,
+    kind: u8,
+}
+
+/// Which of a light's samples is being inserted: its own hemicube texels, or the neighbouring
+/// copies that splat them (which never add to a cell the light's own samples reached).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Insert {
+    /// A texel's own sample.
+    Own,
+    /// A splatted copy of one, in a neighbouring cell.
+    Copy,
+}
+
+/// The cube.
+#[derive(Debug, Clone)]
+pub struct Cube {
+    /// Lower corner of the bounds.
+    pub lo: DVec3,
+    /// Side of a cell (the bounds' longest side over the resolution).
+    pub cell: f64,
+    /// Cells per axis of the bounds.
+    pub dims: [usize; 3],
+    /// Per LDI (axis 0, 1, 2), per cell (row-major over the two other axes), its layers.
+    ldis: [Vec<Vec<Layer>>; 3],
+    /// Layers the current light touched: (axis, cell, layer).
+    touched: Vec<(u8, u32, u16)>,
+    /// Samples dropped because their cell was full.
+    pub dropped: u64,
+}
+
+/// The two image axes of the LDI along `axis`.
+pub fn image_axes(axis: usize) -> (usize, usize) {
+    ((axis + 1) % 3, (axis + 2) % 3)
+}
+
+/// The LDI a normal belongs to: the axis it is most parallel to.
+pub fn axis_of(n: DVec3) -> usize {
+    let a = n.abs();
+    if a.x >= a.y && a.x >= a.z {
+        0
+    } else if a.y >= a.z {
+        1
+    } else {
+        2
+    }
+}
+
+impl Cube {
+    /// An empty cube over the box `lo..hi` with `resolution` cells along its longest side.
+    pub fn new(lo: DVec3, hi: DVec3, resolution: usize) -> Self {
+        let ext = (hi - lo).max(DVec3::splat(1e-9));
+        let cell = ext.max_element() / resolution.max(1) as f64;
+        // Half a cell of margin on every side: samples on the bounds' faces stay inside.
+        let lo = lo - DVec3::splat(0.5 * cell);
+        let dims = [0, 1, 2].map(|a| ((ext[a] / cell).ceil() as usize + 1).max(1));
+        let cells = |axis: usize| {
+            let (b, c) = image_axes(axis);
+            dims[b] * dims[c]
+        };
+        Self {
+            lo,
+            cell,
+            dims,
+            ldis: [0, 1, 2].map(|a| vec![Vec::new(); cells(a)]),
+            touched: Vec::new(),
+            dropped: 0,
+        }
+    }
+
+    /// Continuous cell coordinates of `p` in the LDI along `axis` (cell centres at k + 0.5).
+    pub fn coords(&self, axis: usize, p: DVec3) -> (f64, f64) {
+        let (b, c) = image_axes(axis);
+        (
+            (p[b] - self.lo[b]) / self.cell,
+            (p[c] - self.lo[c]) / self.cell,
+        )
+    }
+
+    /// Index of cell (u, v) of the LDI along `axis`, None outside.
+    fn index(&self, axis: usize, u: i64, v: i64) -> Option<usize> {
+        let (b, c) = image_axes(axis);
+        let (nu, nv) = (self.dims[b] as i64, self.dims[c] as i64);
+        ((0..nu).contains(&u) && (0..nv).contains(&v)).then(|| (v * nu + u) as usize)
+    }
+
+    /// The layer of `cell` whose plane `p`, `n` lies on.
+    fn find(&self, axis: usize, cell: usize, p: DVec3, n: DVec3) -> Option<usize> {
+        let eps = PLANE_EPSILON_CELLS * self.cell;
+        self.ldis[axis][cell].iter().position(|l| {
+            (p.dot(l.normal) - l.d).abs() < eps && n.dot(l.normal) > 1.0 - NORMAL_EPSILON
+        })
+    }
+
+    /// Adds one sample of the current light: irradiance `e` at `p` (unit normal `n`), into its
+    /// own cell or, for a splatted copy, into cell (`du`, `dv`) away. A light's samples that
+    /// meet in one layer are averaged (a hemicube that oversamples a cell counts it once), and
+    /// copies never add where the light's own samples are.
+    pub fn insert(&mut self, p: DVec3, n: DVec3, e: DVec3, kind: Insert, du: i64, dv: i64) {
+        let axis = axis_of(n);
+        let (u, v) = self.coords(axis, p);
+        let Some(cell) = self.index(axis, u.floor() as i64 + du, v.floor() as i64 + dv) else {
+            return;
+        };
+        let want = if kind == Insert::Own { 1 } else { 2 };
+        let layer = match self.find(axis, cell, p, n) {
+            Some(k) => k,
+            None => {
+                let layers = &mut self.ldis[axis][cell];
+                if layers.len() >= MAX_LAYERS {
+                    self.dropped += 1;
+                    return;
+                }
+                layers.push(Layer {
+                    normal: n,
+                    d: p.dot(n),
+                    irradiance: DVec3::ZERO,
+                    sum: DVec3::ZERO,
+                    count: 0,
+                    kind: 0,
+                });
+                layers.len() - 1
+            }
+        };
+        let l = &mut self.ldis[axis][cell][layer];
+        if l.kind == 0 {
+            l.kind = want;
+            self.touched.push((axis as u8, cell as u32, layer as u16));
+        } else if l.kind != want {
+            // Own samples replace copies; copies never add to own samples.
+            if want == 2 {
+                return;
+            }
+            l.kind = 1;
+            l.sum = DVec3::ZERO;
+            l.count = 0;
+        }
+        l.sum += e;
+        l.count += 1;
+    }
+
+    /// Ends the current light: every layer it reached takes the mean of its samples there.
+    pub fn finish_light(&mut self) {
+        for (axis, cell, layer) in std::mem::take(&mut self.touched) {
+            let l = &mut self.ldis[axis as usize][cell as usize][layer as usize];
+            l.irradiance += l.sum / l.count.max(1) as f64;
+            l.sum = DVec3::ZERO;
+            l.count = 0;
+            l.kind = 0;
+        }
+    }
+
+    /// The irradiance at `p` (unit normal `n`): the LDI of `n`, the 2×2 cells nearest `p`
+    /// weighted bilinearly (the paper's averaging kernel), each where it has a layer on `p`'s
+    /// plane; zero where none has.
+    pub fn irradiance(&self, p: DVec3, n: DVec3) -> DVec3 {
+        let axis = axis_of(n);
+        let (u, v) = self.coords(axis, p);
+        let (u, v) = (u - 0.5, v - 0.5);
+        let (u0, v0) = (u.floor(), v.floor());
+        let (fu, fv) = (u - u0, v - v0);
+        let (mut sum, mut wsum) = (DVec3::ZERO, 0.0);
+        for (du, dv, w) in [
+            (0, 0, (1.0 - fu) * (1.0 - fv)),
+            (1, 0, fu * (1.0 - fv)),
+            (0, 1, (1.0 - fu) * fv),
+            (1, 1, fu * fv),
+        ] {
+            if w <= 0.0 {
+                continue;
+            }
+            let Some(cell) = self.index(axis, u0 as i64 + du, v0 as i64 + dv) else {
+                continue;
+            };
+            if let Some(k) = self.find(axis, cell, p, n) {
+                sum += self.ldis[axis][cell][k].irradiance * w;
+                wsum += w;
+            }
+        }
+        if wsum > 0.0 {
+            sum / wsum
+        } else {
+            DVec3::ZERO
+        }
+    }
+
+    /// Layers over all cells (the paper's size: LDC pixels).
+    pub fn layers(&self) -> usize {
+        self.ldis.iter().flatten().map(Vec::len).sum()
+    }
+
+    /// Cells of the three LDIs together.
+    pub fn cells(&self) -> usize {
+        self.ldis.iter().map(Vec::len).sum()
+    }
+
+    /// Bytes the cube would take packed for a GPU: per layer a plane and an irradiance (8
+    /// floats), per cell an offset and a count.
+    pub fn bytes(&self) -> u64 {
+        self.layers() as u64 * 32 + self.cells() as u64 * 8
+    }
+
+    /// Largest difference between two cubes' layers, relative to the larger irradiance of the
+    /// two, over layers both have (matched by cell and plane), and the fraction of layers of
+    /// either that the other lacks.
+    pub fn compare(&self, other: &Cube) -> (f64, f64) {
+        let (mut worst, mut missing, mut total) = (0.0f64, 0usize, 0usize);
+        let peak = self
+            .ldis
+            .iter()
+            .flatten()
+            .flatten()
+            .map(|l| l.irradiance.max_element())
+            .fold(0.0f64, f64::max)
+            .max(1e-300);
+        for axis in 0..3 {
+            for (a, b) in self.ldis[axis].iter().zip(&other.ldis[axis]) {
+                total += a.len().max(b.len());
+                for la in a {
+                    let p = la.normal * la.d;
+                    match b.iter().find(|lb| {
+                        (p.dot(lb.normal) - lb.d).abs() < PLANE_EPSILON_CELLS * self.cell
+                            && la.normal.dot(lb.normal) > 1.0 - NORMAL_EPSILON
+                    }) {
+                        Some(lb) => {
+                            worst = worst
+                                .max((la.irradiance - lb.irradiance).abs().max_element() / peak)
+                        }
+                        None => missing += 1,
+                    }
+                }
+            }
+        }
+        (worst, missing as f64 / total.max(1) as f64)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cube() -> Cube {
+        Cube::new(DVec3::ZERO, DVec3::ONE, 8)
+    }
+
+    #[test]
+    fn samples_of_one_light_average_and_lights_add() {
+        let mut c = cube();
+        let n = DVec3::Y;
+        // Two samples of one light in one cell: their mean.
+        c.insert(
+            DVec3::new(0.51, 0.2, 0.51),
+            n,
+            DVec3::splat(1.0),
+            Insert::Own,
+            0,
+            0,
+        );
+        c.insert(
+            DVec3::new(0.52, 0.2, 0.52),
+            n,
+            DVec3::splat(3.0),
+            Insert::Own,
+            0,
+            0,
+        );
+        c.finish_light();
+        // A second light adds.
+        c.insert(
+            DVec3::new(0.51, 0.2, 0.51),
+            n,
+            DVec3::splat(4.0),
+            Insert::Own,
+            0,
+            0,
+        );
+        c.finish_light();
+        assert_eq!(c.layers(), 1);
+        let p = DVec3::new(0.5625, 0.2, 0.5625); // the cell's centre: no neighbour weighs
+        assert!((c.irradiance(p, n) - DVec3::splat(6.0)).length() < 1e-12);
+    }
+
+    #[test]
+    fn planes_apart_open_layers_and_lookups_take_their_own() {
+        let mut c = cube();
+        // A floor and a shelf above it in the same column of the y LDI, and the shelf's
+        // underside facing down.
+        let (floor, shelf) = (DVec3::new(0.5, 0.0, 0.5), DVec3::new(0.5, 0.5, 0.5));
+        c.insert(floor, DVec3::Y, DVec3::splat(1.0), Insert::Own, 0, 0);
+        c.insert(shelf, DVec3::Y, DVec3::splat(2.0), Insert::Own, 0, 0);
+        c.insert(shelf, -DVec3::Y, DVec3::splat(5.0), Insert::Own, 0, 0);
+        c.finish_light();
+        assert_eq!(c.layers(), 3);
+        assert_eq!(c.irradiance(floor, DVec3::Y), DVec3::splat(1.0));
+        assert_eq!(c.irradiance(shelf, DVec3::Y), DVec3::splat(2.0));
+        assert_eq!(c.irradiance(shelf, -DVec3::Y), DVec3::splat(5.0));
+        // A wall's sample goes to the x LDI; nothing there on the floor's plane.
+        assert_eq!(
+            c.irradiance(DVec3::new(0.5, 0.3, 0.5), DVec3::X),
+            DVec3::ZERO
+        );
+    }
+
+    #[test]
+    fn copies_fill_gaps_but_never_add_to_own_samples() {
+        let mut c = cube();
+        let n = DVec3::Z;
+        let p = DVec3::new(0.3, 0.3, 0.0);
+        c.insert(p, n, DVec3::splat(2.0), Insert::Own, 0, 0);
+        c.insert(
+            p + DVec3::X * c.cell,
+            n,
+            DVec3::splat(4.0),
+            Insert::Own,
+            0,
+            0,
+        );
+        // The first sample's copy into the next cell is ignored; into the one before, kept.
+        c.insert(p, n, DVec3::splat(2.0), Insert::Copy, 1, 0);
+        c.insert(p, n, DVec3::splat(2.0), Insert::Copy, -1, 0);
+        c.finish_light();
+        let at = |k: f64| c.irradiance(p + DVec3::X * (k * c.cell), n);
+        assert_eq!(c.layers(), 3);
+        // Along the row the values run 2 (copy), 2 (own), 4 (own), whatever the filter.
+        for k in [-1.0, 0.0, 1.0] {
+            let e = at(k).x;
+            assert!((2.0..=4.0).contains(&e), "{k}: {e}");
+        }
+    }
+
+    #[test]
+    fn axis_is_the_most_parallel() {
+        assert_eq!(axis_of(DVec3::new(0.1, -0.9, 0.2)), 1);
+        assert_eq!(axis_of(DVec3::new(-0.7, 0.1, 0.7)), 0);
+        assert_eq!(axis_of(DVec3::new(0.0, 0.1, -0.99)), 2);
+    }
+}
