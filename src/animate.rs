@@ -22,6 +22,9 @@ pub struct Sampling {
     pub frames: usize,
     /// Frames per second of scene time: frame k shows time k / fps.
     pub fps: f64,
+    /// Degrees the camera turns about its target (around its up vector) from the first frame to
+    /// the last: a walk around a scene, which needs no re-solve (0: the scene's camera).
+    pub orbit: f64,
 }
 
 impl Sampling {
@@ -44,7 +47,11 @@ impl Sampling {
                 ))
             }
         };
-        Ok(Self { frames, fps })
+        Ok(Self {
+            frames,
+            fps,
+            orbit: 0.0,
+        })
     }
 }
 
@@ -129,11 +136,23 @@ pub fn animate(
     records.push(first);
     progress.advance(1);
     let n = engine.prepared().settings.iterations_per_frame;
+    // Without keyframes nothing moves: no update (every method can walk a still scene).
+    let moves = scene.duration.is_some();
+    // The camera as the engine drew frame 0 (its size in output pixels, as set_camera wants).
+    let mut base = engine.prepared().camera.clone();
+    let k = base.supersample.max(1);
+    (base.width, base.height) = (base.width / k, base.height / k);
     for k in 1..sampling.frames {
         let time = k as f64 / sampling.fps;
         let start = Instant::now();
-        engine.set_time(time)?;
-        engine.update()?;
+        if moves {
+            engine.set_time(time)?;
+            engine.update()?;
+        }
+        if sampling.orbit != 0.0 {
+            let turn = sampling.orbit.to_radians() * k as f64 / (sampling.frames - 1) as f64;
+            engine.set_camera(orbited(&base, turn))?;
+        }
         let update_ms = ms(start);
         let t = Instant::now();
         engine.iterate(n)?;
@@ -163,6 +182,16 @@ pub fn animate(
     }
     progress.end();
     Ok(records)
+}
+
+/// `camera` turned by `angle` (radians) about its target, around its up vector.
+pub fn orbited(camera: &crate::scene::Camera, angle: f64) -> crate::scene::Camera {
+    let axis = camera.up.normalize();
+    let q = glam::DQuat::from_axis_angle(axis, angle);
+    crate::scene::Camera {
+        eye: camera.target + q * (camera.eye - camera.target),
+        ..camera.clone()
+    }
 }
 
 /// A one-line summary of the frame rate: all frames, and the animated ones (after the first,

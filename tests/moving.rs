@@ -62,7 +62,11 @@ fn frames_against_scratch(o: &Options, frames: usize, fps: f64) -> Vec<f64> {
     let records = animate(
         &scene,
         o,
-        Sampling { frames, fps },
+        Sampling {
+            frames,
+            fps,
+            orbit: 0.0,
+        },
         &Silent,
         &mut |r, image| {
             images.push((r.time, image.clone()));

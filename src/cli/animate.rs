@@ -6,7 +6,7 @@ use super::progress::Bars;
 use antiradiance::animate::{animate, summary, FrameRecord, Sampling};
 use antiradiance::engine::Options;
 use antiradiance::frame::image::{check_output_path, write_atomic};
-use antiradiance::{BackendKind, Scene};
+use antiradiance::{BackendKind, Method, Scene};
 use anyhow::{Context, Result};
 use clap::Args;
 use std::path::PathBuf;
@@ -46,6 +46,16 @@ pub struct AnimateArgs {
     /// Which implementation solves and draws.
     #[arg(long, value_enum, default_value_t = BackendKind::Gpu)]
     pub backend: BackendKind,
+    /// Global-illumination method; a scene with keyframes needs antiradiance, a still scene
+    /// (walked with --orbit) takes any.
+    #[arg(long, value_enum, default_value_t = Method::Antiradiance)]
+    pub method: Method,
+    /// Degrees the camera turns about its target over the frames (a walk around the scene;
+    /// nothing is re-solved for it).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite)]
+    pub orbit: f64,
+    #[command(flatten)]
+    pub baseline: super::args::BaselineArgs,
     /// Shadow map side in texels.
     #[arg(long, default_value_t = 1024)]
     pub shadow_map_size: u32,
@@ -65,7 +75,8 @@ impl AnimateArgs {
 
 /// Renders the frames of `scene` into `a.out`, then writes `frames.csv` and prints the rate.
 fn run(scene: &Scene, a: AnimateArgs, name: &str) -> Result<()> {
-    let sampling = Sampling::of(scene, a.frames.map(|n| n as usize), a.fps)?;
+    let mut sampling = Sampling::of(scene, a.frames.map(|n| n as usize), a.fps)?;
+    sampling.orbit = a.orbit;
     let mut solver = a.solver.overrides();
     solver.iterations_per_frame = a.iterations_per_frame.map(|n| n as usize);
     let o = Options {
@@ -74,6 +85,8 @@ fn run(scene: &Scene, a: AnimateArgs, name: &str) -> Result<()> {
         height: a.size.height,
         supersample: a.supersample,
         backend: a.backend,
+        method: a.method,
+        baseline: a.baseline.settings(),
         shadow_map_size: a.shadow_map_size,
         device: a.device,
         ..Options::default()
