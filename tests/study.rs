@@ -77,6 +77,7 @@ fn tiny_study_writes_csv_and_plots() {
     o.rays_per_link = vec![4, 16];
     o.subdivisions = vec![0, 2];
     o.vpls = vec![8, 32];
+    o.cubes = vec![32];
     let ctx = context();
     o.render = Options {
         context: Some(ctx.clone()),
@@ -93,13 +94,14 @@ fn tiny_study_writes_csv_and_plots() {
     // base, 64 bins (32 is the base), elem 0.25, asymmetric, f32: 5 configurations × 2
     // iterations; hierarchical radiosity at 4 and 16 rays per link and progressive refinement at
     // subdivision 0 and 2, × 2 iterations; instant radiosity at 8 and 32 paths (one image
-    // each); plus 3 path tracer runs.
-    assert_eq!(rows.len(), 23);
-    assert_eq!(logged, 23);
+    // each); image-based radiosity at cube 32 with 8 and 32 paths (one image each); plus 3
+    // path tracer runs.
+    assert_eq!(rows.len(), 25);
+    assert_eq!(logged, 25);
     let csv = std::fs::read_to_string(dir.join("study.csv")).unwrap();
     let lines: Vec<&str> = csv.lines().collect();
     assert_eq!(lines[0], CSV_HEADER);
-    assert_eq!(lines.len(), 24);
+    assert_eq!(lines.len(), 26);
     let cols = CSV_HEADER.split(',').count();
     let families: Vec<&str> = lines[1..]
         .iter()
@@ -114,6 +116,7 @@ fn tiny_study_writes_csv_and_plots() {
         "rays_per_link",
         "subdivision",
         "vpls",
+        "cube",
         "spp",
     ] {
         assert!(families.contains(&f), "no {f} rows");
@@ -134,6 +137,12 @@ fn tiny_study_writes_csv_and_plots() {
             "instant-radiosity" => assert!(
                 r.links == Some(0)
                     && r.iterations == Some(1)
+                    && r.vpls.unwrap() >= r.vpl_paths.unwrap() as usize
+            ),
+            "image-based-radiosity" => assert!(
+                r.links == Some(0)
+                    && r.iterations == Some(1)
+                    && r.cube == Some(32)
                     && r.vpls.unwrap() >= r.vpl_paths.unwrap() as usize
             ),
             _ => assert_eq!(r.method, "pathtracer"),

@@ -59,9 +59,9 @@ pub struct StudyArgs {
     /// Path tracer sample counts, comma-separated (default 1,4,16,64,256).
     #[arg(long, value_delimiter = ',')]
     pub spp: Option<Vec<u32>>,
-    /// Methods measured, comma-separated (default: all four; hierarchical and progressive
+    /// Methods measured, comma-separated (default: all five; hierarchical and progressive
     /// radiosity run at the scene's settings, after every iteration like antiradiance;
-    /// instant radiosity once per --vpls).
+    /// instant radiosity once per --vpls; image-based radiosity once per --vpls and --cubes).
     #[arg(long, value_enum, value_delimiter = ',')]
     pub methods: Option<Vec<Method>>,
     /// hierarchical-radiosity: visibility rays per link to try, comma-separated (default
@@ -72,10 +72,14 @@ pub struct StudyArgs {
     /// 0,2).
     #[arg(long, value_delimiter = ',')]
     pub subdivisions: Option<Vec<u32>>,
-    /// instant-radiosity: light paths to try, comma-separated, one image each (default
-    /// 16,64,256,1024).
+    /// instant-radiosity and image-based-radiosity: light paths to try, comma-separated, one
+    /// image each (default 16,64,256,1024).
     #[arg(long, value_delimiter = ',')]
     pub vpls: Option<Vec<u32>>,
+    /// image-based-radiosity: cube resolutions to try, comma-separated, one curve each (default
+    /// 64,128,256).
+    #[arg(long, value_delimiter = ',')]
+    pub cubes: Option<Vec<u32>>,
     /// Skip the run with the other iteration scheme.
     #[arg(long)]
     pub one_scheme: bool,
@@ -156,6 +160,7 @@ impl StudyArgs {
         o.rays_per_link = self.rays_per_link.unwrap_or(o.rays_per_link);
         o.subdivisions = self.subdivisions.unwrap_or(o.subdivisions);
         o.vpls = self.vpls.unwrap_or(o.vpls);
+        o.cubes = self.cubes.unwrap_or(o.cubes);
         o.both_schemes = !self.one_scheme;
         o.both_precisions = !self.one_precision;
         o.render.backend = self.backend;

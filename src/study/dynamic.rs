@@ -378,6 +378,7 @@ fn colour(method: &str) -> RGBColor {
     match method {
         "antiradiance" => RGBColor(200, 30, 30),
         "instant-radiosity" => RGBColor(30, 120, 30),
+        "image-based-radiosity" => RGBColor(200, 130, 20),
         "pathtracer" => RGBColor(30, 60, 200),
         _ => RGBColor(140, 60, 160),
     }

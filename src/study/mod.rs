@@ -51,8 +51,11 @@ pub struct StudyOptions {
     pub rays_per_link: Vec<u32>,
     /// Receiver subdivision levels of the progressive-refinement runs, one run each.
     pub subdivisions: Vec<u32>,
-    /// Light paths of the instant-radiosity runs, one image each (they form one curve).
+    /// Light paths of the instant-radiosity runs, one image each (they form one curve), and
+    /// of the image-based radiosity runs (one curve per cube resolution).
     pub vpls: Vec<u32>,
+    /// Cube resolutions of the image-based radiosity runs, one curve each.
+    pub cubes: Vec<u32>,
 }
 
 impl StudyOptions {
@@ -73,6 +76,7 @@ impl StudyOptions {
             rays_per_link: vec![4, 16, crate::methods::DEFAULT_RAYS_PER_LINK, 141],
             subdivisions: vec![0, crate::methods::DEFAULT_SUBDIVISION],
             vpls: vec![16, 64, crate::methods::DEFAULT_VPLS, 1024],
+            cubes: vec![64, crate::methods::DEFAULT_CUBE, 256],
         }
     }
 }
@@ -85,7 +89,8 @@ pub struct Row {
     pub method: &'static str,
     /// The parameter varied in this run's family: `base`, `bins`, `element_size`, `scheme`,
     /// `precision` (antiradiance), `rays_per_link` (hierarchical radiosity), `subdivision`
-    /// (progressive refinement), `vpls` (instant radiosity), or `spp`.
+    /// (progressive refinement), `vpls` (instant radiosity), `cube` (image-based radiosity), or
+    /// `spp`.
     pub family: String,
     /// Label of the run's curve in the plots.
     pub label: String,
@@ -131,6 +136,8 @@ pub struct Row {
     pub vpl_paths: Option<u32>,
     /// VPLs those paths left (instant radiosity).
     pub vpls: Option<usize>,
+    /// Cube resolution (image-based radiosity).
+    pub cube: Option<u32>,
 }
 
 impl Row {
@@ -269,6 +276,22 @@ fn configs(scene: &Scene, o: &StudyOptions) -> Result<Vec<Config>> {
                     r.solver.iterations = Some(1);
                 }),
             });
+        }
+    }
+    if o.methods.contains(&Method::ImageBasedRadiosity) {
+        // Per cube resolution a curve of one image per VPL count: the cube is built once.
+        for &c in &o.cubes {
+            for &v in &o.vpls {
+                out.push(Config {
+                    family: "cube",
+                    label: format!("image-based radiosity, cube {c}"),
+                    options: with(Method::ImageBasedRadiosity, &|r| {
+                        r.baseline.vpls = v;
+                        r.baseline.cube = c;
+                        r.solver.iterations = Some(1);
+                    }),
+                });
+            }
         }
     }
     if !o.methods.contains(&Method::Antiradiance) {
@@ -417,8 +440,13 @@ pub fn run(
                 subdivision: (method == Method::ProgressiveRadiosity)
                     .then_some(c.options.baseline.subdivision),
                 shots: per_iteration.map(|n| (k * n as usize).min(report.shots.len())),
-                vpl_paths: (method == Method::InstantRadiosity).then_some(c.options.baseline.vpls),
+                vpl_paths: matches!(
+                    method,
+                    Method::InstantRadiosity | Method::ImageBasedRadiosity
+                )
+                .then_some(c.options.baseline.vpls),
                 vpls: report.figures.get("vpls").map(|&v| v as usize),
+                cube: (method == Method::ImageBasedRadiosity).then_some(c.options.baseline.cube),
             };
             log(&row);
             rows.push(row);
@@ -462,6 +490,7 @@ pub fn run(
             shots: None,
             vpl_paths: None,
             vpls: None,
+            cube: None,
         };
         log(&row);
         rows.push(row);
@@ -472,7 +501,7 @@ pub fn run(
 /// The CSV header of [`csv`].
 pub const CSV_HEADER: &str = "method,family,bins,element_size,scheme,precision,iterations,spp,\
 elements,links,linking_ms,setup_ms,frame_ms,total_ms,residual,rel_rmse,mare,flip,indirect_rel_rmse,\
-indirect_mare,indirect_flip,fallbacks,rays_per_link,subdivision,shots,vpl_paths,vpls";
+indirect_mare,indirect_flip,fallbacks,rays_per_link,subdivision,shots,vpl_paths,vpls,cube";
 
 /// `study.csv`: one row per run, empty fields where a column does not apply.
 pub fn csv(rows: &[Row]) -> String {
@@ -485,7 +514,7 @@ pub fn csv(rows: &[Row]) -> String {
         let ind = |f: fn(&Metrics) -> f64| opt(r.indirect.as_ref().map(f));
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3},{},{:.6e},{:.6e},{:.6e},{},{},{},\"{}\",{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{:.3},{:.3},{:.3},{:.3},{},{:.6e},{:.6e},{:.6e},{},{},{},\"{}\",{},{},{},{},{},{}",
             r.method,
             r.family,
             opt(r.bins),
@@ -513,6 +542,7 @@ pub fn csv(rows: &[Row]) -> String {
             opt(r.shots),
             opt(r.vpl_paths),
             opt(r.vpls),
+            opt(r.cube),
         );
     }
     s

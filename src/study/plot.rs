@@ -199,7 +199,7 @@ fn style_of(method: &str) -> Style {
     match method {
         "hierarchical-radiosity" => Style::Dashed,
         "progressive-radiosity" => Style::Dotted,
-        "instant-radiosity" => Style::LongDashed,
+        "instant-radiosity" | "image-based-radiosity" => Style::LongDashed,
         _ => Style::Solid,
     }
 }
@@ -370,8 +370,13 @@ pub fn convergence(rows: &[Row], path: &Path) -> Result<()> {
     let areas = root.split_evenly((1, 2));
     let ar: Vec<Row> = rows
         .iter()
-        // Instant radiosity does not iterate: it is on the error-against-time plot only.
-        .filter(|r| r.method != "pathtracer" && r.method != "instant-radiosity")
+        // Instant and image-based radiosity do not iterate: on the error-against-time plot only.
+        .filter(|r| {
+            !matches!(
+                r.method,
+                "pathtracer" | "instant-radiosity" | "image-based-radiosity"
+            )
+        })
         .cloned()
         .collect();
     let kmax = ar
@@ -484,6 +489,7 @@ mod tests {
             shots: None,
             vpl_paths: None,
             vpls: None,
+            cube: None,
         }
     }
 
