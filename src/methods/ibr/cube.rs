@@ -50,10 +50,10 @@ pub struct Cube {
     pub dims: [usize; 3],
     /// Per LDI (axis 0, 1, 2), per cell (row-major over the two other axes), its layers.
     ldis: [Vec<Vec<Layer>>; 3],
-    /// Layers the current light touched: (axis, cell, layer).
-    touched: Vec<(u8, u32, u16)>,
-    /// Samples dropped because their cell was full.
-    pub dropped: u64,
+    /// Per LDI, the layers the current light touched: (cell, layer).
+    touched: [Vec<(u32, u16)>; 3],
+    /// Per LDI, samples dropped because their cell was full.
+    dropped: [u64; 3],
 }
 
 /// The two image axes of the LDI along `axis`.
@@ -70,6 +70,110 @@ pub fn axis_of(n: DVec3) -> usize {
         1
     } else {
         2
+    }
+}
+
+/// Where the cells lie: what every LDI shares.
+#[derive(Debug, Clone, Copy)]
+struct Grid {
+    lo: DVec3,
+    cell: f64,
+    dims: [usize; 3],
+}
+
+impl Grid {
+    fn coords(&self, axis: usize, p: DVec3) -> (f64, f64) {
+        let (b, c) = image_axes(axis);
+        (
+            (p[b] - self.lo[b]) / self.cell,
+            (p[c] - self.lo[c]) / self.cell,
+        )
+    }
+
+    fn index(&self, axis: usize, u: i64, v: i64) -> Option<usize> {
+        let (b, c) = image_axes(axis);
+        let (nu, nv) = (self.dims[b] as i64, self.dims[c] as i64);
+        ((0..nu).contains(&u) && (0..nv).contains(&v)).then(|| (v * nu + u) as usize)
+    }
+
+    fn find(&self, layers: &[Layer], p: DVec3, n: DVec3) -> Option<usize> {
+        let eps = PLANE_EPSILON_CELLS * self.cell;
+        layers.iter().position(|l| {
+            (p.dot(l.normal) - l.d).abs() < eps && n.dot(l.normal) > 1.0 - NORMAL_EPSILON
+        })
+    }
+}
+
+/// One LDI of a cube, borrowed on its own: the three take a light's samples in parallel.
+pub struct Ldi<'a> {
+    grid: Grid,
+    axis: usize,
+    cells: &'a mut [Vec<Layer>],
+    touched: &'a mut Vec<(u32, u16)>,
+    dropped: &'a mut u64,
+}
+
+impl Ldi<'_> {
+    /// The axis of this LDI.
+    pub fn axis(&self) -> usize {
+        self.axis
+    }
+
+    /// [`Cube::insert`] for a sample whose normal is this LDI's.
+    pub fn insert(&mut self, p: DVec3, n: DVec3, e: DVec3, kind: Insert, du: i64, dv: i64) {
+        let (u, v) = self.grid.coords(self.axis, p);
+        let Some(cell) = self
+            .grid
+            .index(self.axis, u.floor() as i64 + du, v.floor() as i64 + dv)
+        else {
+            return;
+        };
+        let want = if kind == Insert::Own { 1 } else { 2 };
+        let layers = &mut self.cells[cell];
+        let layer = match self.grid.find(layers, p, n) {
+            Some(k) => k,
+            None => {
+                if layers.len() >= MAX_LAYERS {
+                    *self.dropped += 1;
+                    return;
+                }
+                layers.push(Layer {
+                    normal: n,
+                    d: p.dot(n),
+                    irradiance: DVec3::ZERO,
+                    sum: DVec3::ZERO,
+                    count: 0,
+                    kind: 0,
+                });
+                layers.len() - 1
+            }
+        };
+        let l = &mut layers[layer];
+        if l.kind == 0 {
+            l.kind = want;
+            self.touched.push((cell as u32, layer as u16));
+        } else if l.kind != want {
+            // Own samples replace copies; copies never add to own samples.
+            if want == 2 {
+                return;
+            }
+            l.kind = 1;
+            l.sum = DVec3::ZERO;
+            l.count = 0;
+        }
+        l.sum += e;
+        l.count += 1;
+    }
+
+    /// [`Cube::finish_light`] for this LDI.
+    pub fn finish_light(&mut self) {
+        for (cell, layer) in self.touched.drain(..) {
+            let l = &mut self.cells[cell as usize][layer as usize];
+            l.irradiance += l.sum / l.count.max(1) as f64;
+            l.sum = DVec3::ZERO;
+            l.count = 0;
+            l.kind = 0;
+        }
     }
 }
 
@@ -90,33 +194,39 @@ impl Cube {
             cell,
             dims,
             ldis: [0, 1, 2].map(|a| vec![Vec::new(); cells(a)]),
-            touched: Vec::new(),
-            dropped: 0,
+            touched: Default::default(),
+            dropped: [0; 3],
+        }
+    }
+
+    fn grid(&self) -> Grid {
+        Grid {
+            lo: self.lo,
+            cell: self.cell,
+            dims: self.dims,
         }
     }
 
     /// Continuous cell coordinates of `p` in the LDI along `axis` (cell centres at k + 0.5).
     pub fn coords(&self, axis: usize, p: DVec3) -> (f64, f64) {
-        let (b, c) = image_axes(axis);
-        (
-            (p[b] - self.lo[b]) / self.cell,
-            (p[c] - self.lo[c]) / self.cell,
+        self.grid().coords(axis, p)
+    }
+
+    /// The three LDIs, each borrowed on its own.
+    pub fn ldis_mut(&mut self) -> [Ldi<'_>; 3] {
+        let grid = self.grid();
+        let [c0, c1, c2] = &mut self.ldis;
+        let [t0, t1, t2] = &mut self.touched;
+        let [d0, d1, d2] = &mut self.dropped;
+        [(0, c0, t0, d0), (1, c1, t1, d1), (2, c2, t2, d2)].map(
+            |(axis, cells, touched, dropped)| Ldi {
+                grid,
+                axis,
+                cells,
+                touched,
+                dropped,
+            },
         )
-    }
-
-    /// Index of cell (u, v) of the LDI along `axis`, None outside.
-    fn index(&self, axis: usize, u: i64, v: i64) -> Option<usize> {
-        let (b, c) = image_axes(axis);
-        let (nu, nv) = (self.dims[b] as i64, self.dims[c] as i64);
-        ((0..nu).contains(&u) && (0..nv).contains(&v)).then(|| (v * nu + u) as usize)
-    }
-
-    /// The layer of `cell` whose plane `p`, `n` lies on.
-    fn find(&self, axis: usize, cell: usize, p: DVec3, n: DVec3) -> Option<usize> {
-        let eps = PLANE_EPSILON_CELLS * self.cell;
-        self.ldis[axis][cell].iter().position(|l| {
-            (p.dot(l.normal) - l.d).abs() < eps && n.dot(l.normal) > 1.0 - NORMAL_EPSILON
-        })
     }
 
     /// Adds one sample of the current light: irradiance `e` at `p` (unit normal `n`), into its
@@ -125,56 +235,24 @@ impl Cube {
     /// copies never add where the light's own samples are.
     pub fn insert(&mut self, p: DVec3, n: DVec3, e: DVec3, kind: Insert, du: i64, dv: i64) {
         let axis = axis_of(n);
-        let (u, v) = self.coords(axis, p);
-        let Some(cell) = self.index(axis, u.floor() as i64 + du, v.floor() as i64 + dv) else {
-            return;
-        };
-        let want = if kind == Insert::Own { 1 } else { 2 };
-        let layer = match self.find(axis, cell, p, n) {
-            Some(k) => k,
-            None => {
-                let layers = &mut self.ldis[axis][cell];
-                if layers.len() >= MAX_LAYERS {
-                    self.dropped += 1;
-                    return;
-                }
-                layers.push(Layer {
-                    normal: n,
-                    d: p.dot(n),
-                    irradiance: DVec3::ZERO,
-                    sum: DVec3::ZERO,
-                    count: 0,
-                    kind: 0,
-                });
-                layers.len() - 1
-            }
-        };
-        let l = &mut self.ldis[axis][cell][layer];
-        if l.kind == 0 {
-            l.kind = want;
-            self.touched.push((axis as u8, cell as u32, layer as u16));
-        } else if l.kind != want {
-            // Own samples replace copies; copies never add to own samples.
-            if want == 2 {
-                return;
-            }
-            l.kind = 1;
-            l.sum = DVec3::ZERO;
-            l.count = 0;
-        }
-        l.sum += e;
-        l.count += 1;
+        let [a, b, c] = self.ldis_mut();
+        [a, b, c]
+            .into_iter()
+            .nth(axis)
+            .unwrap()
+            .insert(p, n, e, kind, du, dv);
     }
 
     /// Ends the current light: every layer it reached takes the mean of its samples there.
     pub fn finish_light(&mut self) {
-        for (axis, cell, layer) in std::mem::take(&mut self.touched) {
-            let l = &mut self.ldis[axis as usize][cell as usize][layer as usize];
-            l.irradiance += l.sum / l.count.max(1) as f64;
-            l.sum = DVec3::ZERO;
-            l.count = 0;
-            l.kind = 0;
+        for mut l in self.ldis_mut() {
+            l.finish_light();
         }
+    }
+
+    /// Samples dropped because their cell was full.
+    pub fn dropped(&self) -> u64 {
+        self.dropped.iter().sum()
     }
 
     /// The irradiance at `p` (unit normal `n`): the LDI of `n`, the 2×2 cells nearest `p`
@@ -182,7 +260,8 @@ impl Cube {
     /// plane; zero where none has.
     pub fn irradiance(&self, p: DVec3, n: DVec3) -> DVec3 {
         let axis = axis_of(n);
-        let (u, v) = self.coords(axis, p);
+        let grid = self.grid();
+        let (u, v) = grid.coords(axis, p);
         let (u, v) = (u - 0.5, v - 0.5);
         let (u0, v0) = (u.floor(), v.floor());
         let (fu, fv) = (u - u0, v - v0);
@@ -196,10 +275,10 @@ impl Cube {
             if w <= 0.0 {
                 continue;
             }
-            let Some(cell) = self.index(axis, u0 as i64 + du, v0 as i64 + dv) else {
+            let Some(cell) = grid.index(axis, u0 as i64 + du, v0 as i64 + dv) else {
                 continue;
             };
-            if let Some(k) = self.find(axis, cell, p, n) {
+            if let Some(k) = grid.find(&self.ldis[axis][cell], p, n) {
                 sum += self.ldis[axis][cell][k].irradiance * w;
                 wsum += w;
             }

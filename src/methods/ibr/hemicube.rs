@@ -136,33 +136,47 @@ pub fn cast(light: &Light, h: u32, caster: &RayCaster, surf: &Surfaces, lift: f6
 /// so that a surface seen at a grazing angle is covered along its length); then the light's
 /// layers take their means.
 pub fn warp(cube: &mut Cube, samples: &[Sample]) {
+    let cell = cube.cell;
+    let grid = |axis: usize, p: DVec3| cube.coords(axis, p);
+    // Each sample belongs to one LDI: the three take theirs in parallel, in the samples' order
+    // (the same cube as one after another).
+    let mut by_axis: [Vec<(&Sample, (f64, f64))>; 3] = Default::default();
     for s in samples {
-        cube.insert(s.p, s.n, s.irradiance, Insert::Own, 0, 0);
+        let axis = super::cube::axis_of(s.n);
+        by_axis[axis].push((s, grid(axis, s.p)));
     }
-    for s in samples {
-        for (du, dv) in splat_cells(cube, s) {
-            cube.insert(s.p, s.n, s.irradiance, Insert::Copy, du, dv);
+    let mut ldis = cube.ldis_mut();
+    rayon::scope(|scope| {
+        for (ldi, samples) in ldis.iter_mut().zip(&by_axis) {
+            scope.spawn(move |_| {
+                for (s, _) in samples {
+                    ldi.insert(s.p, s.n, s.irradiance, Insert::Own, 0, 0);
+                }
+                for &(s, uv) in samples {
+                    splat_cells(cell, ldi.axis(), uv, s, |du, dv| {
+                        ldi.insert(s.p, s.n, s.irradiance, Insert::Copy, du, dv)
+                    });
+                }
+                ldi.finish_light();
+            });
         }
-    }
-    cube.finish_light();
+    });
 }
 
-/// The cells (offsets from the sample's own) other than its own whose centres lie inside the
-/// sample's footprint, projected along its LDI's axis.
-fn splat_cells(cube: &Cube, s: &Sample) -> Vec<(i64, i64)> {
-    let axis = super::cube::axis_of(s.n);
+/// Calls `each` with the cells (offsets from the sample's own, at cell coordinates `uv` in the
+/// LDI along `axis`) other than its own whose centres lie inside the sample's footprint.
+fn splat_cells(cell: f64, axis: usize, uv: (f64, f64), s: &Sample, mut each: impl FnMut(i64, i64)) {
     let (b, c) = super::cube::image_axes(axis);
-    let [e, f] = s.span.map(|v| (v[b] / cube.cell, v[c] / cube.cell));
+    let [e, f] = s.span.map(|v| (v[b] / cell, v[c] / cell));
     let det = e.0 * f.1 - e.1 * f.0;
     if !(det.abs() > 1e-12) {
-        return Vec::new();
+        return;
     }
-    // Within one cell of the sample's own, nothing to add; else the parallelogram's half extents.
+    // The parallelogram's half extents, in cells.
     let hu = ((e.0.abs() + f.0.abs()) * 0.5).ceil().min(MAX_SPLAT as f64) as i64;
     let hv = ((e.1.abs() + f.1.abs()) * 0.5).ceil().min(MAX_SPLAT as f64) as i64;
-    let (u, v) = cube.coords(axis, s.p);
+    let (u, v) = uv;
     let (fu, fv) = (u - u.floor(), v - v.floor());
-    let mut out = Vec::new();
     for dv in -hv..=hv {
         for du in -hu..=hu {
             if du == 0 && dv == 0 {
@@ -173,11 +187,10 @@ fn splat_cells(cube: &Cube, s: &Sample) -> Vec<(i64, i64)> {
             let a = (x * f.1 - y * f.0) / det;
             let g = (e.0 * y - e.1 * x) / det;
             if a.abs() <= 0.5 && g.abs() <= 0.5 {
-                out.push((du, dv));
+                each(du, dv);
             }
         }
     }
-    out
 }
 
 #[cfg(test)]

@@ -124,7 +124,7 @@ pub fn build(
         ("cube_cells", cube.cells() as f64),
         ("cube_layers", cube.layers() as f64),
         ("cube_bytes", cube.bytes() as f64),
-        ("cube_dropped", cube.dropped as f64),
+        ("cube_dropped", cube.dropped() as f64),
         ("hemicube_samples", samples as f64),
         ("trace_ms", vpls.ms),
         ("hemicube_ms", cast_ms),
