@@ -105,7 +105,7 @@ fn closed_uniform_box() {
         100.0 * rms,
         100.0 * worst
     );
-    record("ibr.box.cube_rms", rms, 0.002);
+    record("ibr.box.cube-rms", rms, 0.002);
     // Measured 0.31% RMS, 0.94% worst (cube 128, hemicubes 128).
     assert!(rms <= 0.006, "{rms}");
     assert!(worst <= 0.02, "{worst}");
