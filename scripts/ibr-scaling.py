@@ -26,7 +26,9 @@ os.makedirs(a.out, exist_ok=True)
 def run(args):
     r = subprocess.run([a.bin] + args, capture_output=True, text=True)
     if r.returncode != 0:
-        sys.exit(f"{' '.join(args)}: {r.stderr.strip().splitlines()[-1]}")
+        last = (r.stderr.strip().splitlines() or ["?"])[-1]
+        print(f"failed: {' '.join(args)}: {last}", file=sys.stderr)
+        return None
     return r
 
 
@@ -42,7 +44,8 @@ for scene in a.scenes:
     name = os.path.splitext(os.path.basename(scene))[0]
     ref = os.path.join(a.out, f"{name}-ref-{a.size}-{a.spp}.exr")
     if not os.path.exists(ref):
-        run(["reference", scene, "--spp", str(a.spp), "--width", w, "--height", h, "--exr", ref])
+        if run(["reference", scene, "--spp", str(a.spp), "--width", w, "--height", h, "--exr", ref]) is None:
+            continue
     runs = [(f"image-based radiosity, cube {c}", ["--method", "image-based-radiosity", "--cube", c])
             for c in a.cubes.split(",")]
     runs += [("instant radiosity", ["--method", "instant-radiosity"]), ("antiradiance", [])]
@@ -50,8 +53,9 @@ for scene in a.scenes:
         exr = os.path.join(a.out, f"{name}-{len(rows)}.exr")
         js = exr + ".json"
         t = time.time()
-        run(["render", scene, "--width", w, "--height", h, "--backend", a.backend, "-o", exr,
-             "--json", js] + extra)
+        if run(["render", scene, "--width", w, "--height", h, "--backend", a.backend, "-o", exr,
+                "--json", js] + extra) is None:
+            continue
         wall = time.time() - t
         r = json.load(open(js))
         p = r["pass_ms"]
@@ -65,7 +69,10 @@ for scene in a.scenes:
             mem = None
             build = r["total_ms"] - frame
             note = f"{int(f['vpls'])} VPLs" if "vpls" in f else f"{r['links']:,} links, {r['iterations']} iterations"
-        m = json.loads(run(["compare", exr, ref]).stdout)
+        c = run(["compare", exr, ref])
+        if c is None:
+            continue
+        m = json.loads(c.stdout)
         rows.append((name, label, build, frame, mem, m["rel_rmse"], note, wall))
 
 print(f"{cpu()}, {os.cpu_count()} cores; {a.backend} backend; {a.size}, references {a.spp} spp\n")
