@@ -172,8 +172,8 @@ pub fn trace(scene: &Scene, sys: &System, settings: &MethodSettings) -> Result<V
     let start = Instant::now();
     if scene.environment != DVec3::ZERO {
         return Err(Error::Invalid(
-            "instant-radiosity does not support an [environment]: its light would need VPLs \
-             from the sky, which this implementation does not trace"
+            "instant-radiosity and image-based-radiosity do not support an [environment]: its \
+             light would need VPLs from the sky, which this implementation does not trace"
                 .into(),
         ));
     }
