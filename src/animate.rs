@@ -113,6 +113,14 @@ pub fn animate(
     progress: &dyn Progress,
     each: &mut dyn FnMut(&FrameRecord, &Image) -> Result<()>,
 ) -> Result<Vec<FrameRecord>> {
+    if scene.duration.is_some() && options.method != crate::settings::Method::Antiradiance {
+        // Before any frame is written: moving objects and lights need the warm-started solve.
+        return Err(Error::Invalid(format!(
+            "--method {}: the scene has keyframes, and moving objects and lights need the \
+             antiradiance method (a still scene can be walked with --orbit by any method)",
+            options.method
+        )));
+    }
     let mut records = Vec::with_capacity(sampling.frames);
     progress.begin("frames", sampling.frames as u64);
     let t0 = Instant::now();

@@ -394,6 +394,39 @@ fn animate_flags_are_checked() {
         &["--frames"],
     );
     refused(&["render", s, "--time", "nan"], 2, &["--time"]);
+    refused(
+        &["animate", s, "--out", out, "--orbit", "nan"],
+        2,
+        &["--orbit"],
+    );
+    // Keyframes need antiradiance: refused before any frame is written.
+    let o2 = d.join("o2");
+    refused(
+        &[
+            "animate",
+            s,
+            "--out",
+            o2.to_str().unwrap(),
+            "--method",
+            "image-based-radiosity",
+        ],
+        1,
+        &["--method image-based-radiosity", "keyframes"],
+    );
+    assert!(!o2.join("frame-0000.png").exists());
+    let still = scene();
+    refused(
+        &[
+            "render",
+            still.to_str().unwrap(),
+            "--method",
+            "image-based-radiosity",
+            "--cube",
+            "3",
+        ],
+        1,
+        &["--cube"],
+    );
 }
 
 /// The CLI reports the plan: `info --json` and `render --json` list `passes`; `--all-passes`
