@@ -134,6 +134,24 @@ pub trait Backend: Solve + Draw + AsAny {
     fn recorder(&mut self) -> &mut dyn Any {
         self.as_any_mut()
     }
+    /// A frame drawn on the host but handed to a host's command buffer as a GPU image (a method
+    /// whose reconstruction runs on the CPU, on the GPU backend); `None` where the GPU
+    /// antiradiance backend records its own passes, or on the CPU backend.
+    fn host_frame(&mut self) -> Option<&mut dyn HostFrame> {
+        None
+    }
+}
+
+/// What [`Backend::host_frame`] gives: the draw, uploaded by commands recorded into a host's
+/// command buffer, into an output image the host then copies, blits or samples.
+pub trait HostFrame {
+    /// Draws the frame of `prep` and records its upload into `cmd`, leaving [`Self::output`]
+    /// shader-readable. `cmd` must complete before the next call (its staging is reused).
+    fn record_draw(&mut self, prep: &Prepared, cmd: ash::vk::CommandBuffer) -> Result<()>;
+    /// The output image (RGBA32F, the camera's size); None before the first draw.
+    fn output(&self) -> Option<&crate::gpu::memory::Image>;
+    /// Multiplies the radiance the next draws upload by `factor` (a viewer's exposure).
+    fn set_exposure(&mut self, factor: f32);
 }
 
 /// The concrete backend behind a `dyn Backend` (the engine finds the GPU antiradiance backend

@@ -42,11 +42,18 @@ impl Engine {
     /// the backend anew: read it again after every [`Engine::record_update`]). It is the frame
     /// before reduction: `camera.supersample` × the image's size (a host samples or blits it).
     pub fn output_image(&mut self) -> Result<OutputImage> {
-        let out = &self
-            .gpu_backend("the output image")?
-            .frame()
-            .images()
-            .output;
+        let out = if self.backend.host_frame().is_some() {
+            let h = self.backend.host_frame().expect("checked");
+            h.output().ok_or_else(|| {
+                Error::Invalid("the output image exists after the first record_draw".into())
+            })?
+        } else {
+            &self
+                .gpu_backend("the output image")?
+                .frame()
+                .images()
+                .output
+        };
         let (stages, access) = out.access.stage_access();
         Ok(OutputImage {
             image: out.raw,
@@ -62,6 +69,10 @@ impl Engine {
     /// Multiplies the output radiance by `factor` from the next draw on (a viewer's exposure;
     /// 1 by default). An update that makes the backend anew starts again at 1.
     pub fn set_exposure(&mut self, factor: f32) -> Result<()> {
+        if let Some(h) = self.backend.host_frame() {
+            h.set_exposure(factor);
+            return Ok(());
+        }
         self.gpu_backend("an exposure")?
             .frame()
             .set_exposure(factor);
@@ -72,6 +83,9 @@ impl Engine {
     /// [`Engine::record_update`] and before the other `record_*` calls. It resets the
     /// engine's query pools in `cmd`.
     pub fn begin_recording(&mut self, cmd: vk::CommandBuffer) -> Result<()> {
+        if self.backend.host_frame().is_some() {
+            return Ok(()); // nothing timed on the device
+        }
         self.gpu_backend("recording into a command buffer")?
             .begin(cmd);
         Ok(())
@@ -80,6 +94,10 @@ impl Engine {
     /// The timed scopes (pass → GPU ms, in order: the solver's, then the frame's) of the
     /// command buffer last begun with [`Engine::begin_recording`], which must have completed.
     pub fn recorded_timings(&mut self) -> Result<Vec<(String, f64)>> {
+        if self.backend.host_frame().is_some() {
+            // The frame was drawn on the host: its wall-clock passes.
+            return Ok(self.backend.take_timings());
+        }
         let g = self.gpu_backend("timestamps")?;
         let mut t = g.solver().read_timings()?.to_vec();
         t.extend_from_slice(g.frame().read_timings()?);

@@ -316,6 +316,9 @@ impl Engine {
     /// [`Engine::begin_recording`]; the solver's images are left for the next iteration. The
     /// command buffer must be submitted and complete before the engine is used otherwise.
     pub fn record_initialize(&mut self, cmd: vk::CommandBuffer) -> Result<()> {
+        if self.backend.host_frame().is_some() {
+            return Ok(()); // solved when the lights were prepared
+        }
         self.gpu_internals()?.record_initialize(cmd)
     }
 
@@ -328,6 +331,9 @@ impl Engine {
             self.prep.settings.scheme,
             self.prep.settings.antiradiance_steps,
         );
+        if self.backend.host_frame().is_some() {
+            return Ok(()); // nothing iterates
+        }
         self.gpu_internals()?
             .record_iterations(cmd, scheme, steps, n)
     }
@@ -336,6 +342,9 @@ impl Engine {
     /// leaves [`Engine::output_image`] in the layout and state that names, for the host's
     /// barrier before it copies, blits or samples it.
     pub fn record_draw(&mut self, cmd: vk::CommandBuffer) -> Result<()> {
+        if let Some(h) = self.backend.host_frame() {
+            return h.record_draw(&self.prep, cmd);
+        }
         self.gpu_internals()?.record_draw(cmd);
         Ok(())
     }

@@ -41,6 +41,12 @@ pub struct ViewArgs {
     pub device: Option<String>,
     #[command(flatten)]
     pub plan: PlanArgs,
+    /// Global-illumination method (a baseline's frame is drawn on the host and uploaded);
+    /// keyframes and light moves need antiradiance.
+    #[arg(long, value_enum, default_value_t = antiradiance::Method::Antiradiance)]
+    pub method: antiradiance::Method,
+    #[command(flatten)]
+    pub baseline: super::super::args::BaselineArgs,
 }
 
 impl ViewArgs {
@@ -57,7 +63,16 @@ impl ViewArgs {
         }
         check_outputs([self.screenshot.as_ref()])?;
         let s = load(self.scene)?;
+        if s.duration.is_some() && self.method != antiradiance::Method::Antiradiance {
+            anyhow::bail!(
+                "--method {}: the scene has keyframes, and moving objects and lights need the \
+                 antiradiance method",
+                self.method
+            );
+        }
         let mut o = self.plan.options();
+        o.method = self.method;
+        o.baseline = self.baseline.settings();
         o.solver = self.solver.overrides();
         o.width = self.size.width;
         o.height = self.size.height;

@@ -82,6 +82,9 @@ impl Playback {
     /// Moves the selected light along world axis `dir` (point and spot lights move; a
     /// directional light turns: J/L about the vertical, I/K/U/O about the horizontal).
     fn move_light(&mut self, engine: &mut Engine, dir: DVec3) -> Result<()> {
+        if engine.method() != antiradiance::Method::Antiradiance {
+            return Ok(()); // a baseline's solution does not follow moving lights
+        }
         let pending = self.pending.take().filter(|p| p.0 == self.selected);
         let Some(light) = pending
             .map(|p| p.1)

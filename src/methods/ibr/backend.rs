@@ -6,9 +6,11 @@
 
 use super::cube::Cube;
 use super::gpu::GpuHemicubes;
-use crate::backend::{Backend, Draw, Prepared, Solve};
+use crate::backend::{Backend, Draw, HostFrame, Prepared, Solve};
 use crate::error::Result;
 use crate::frame::Image;
+use crate::gpu::barrier::{transition, Access};
+use crate::gpu::memory::{Buffer, Image as GpuImage, ImageDesc, Purpose};
 use crate::gpu::Context;
 use crate::methods::instant::backend::idle_figures;
 use crate::methods::{MethodReport, MethodSettings};
@@ -17,6 +19,8 @@ use crate::scene::Scheme;
 use crate::settings::BackendKind;
 use crate::solver::convergence::Figures;
 use crate::solver::Table;
+use ash::vk;
+use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -29,6 +33,9 @@ pub struct ImageBased {
     cube: Option<Cube>,
     report: MethodReport,
     timings: Vec<(String, f64)>,
+    /// The frame handed to a host's command buffer (GPU backend): image, staging, exposure.
+    host: Option<(GpuImage, Buffer)>,
+    exposure: f32,
 }
 
 impl ImageBased {
@@ -59,6 +66,8 @@ impl ImageBased {
             cube: None,
             report: MethodReport::default(),
             timings: Vec::new(),
+            host: None,
+            exposure: 1.0,
         })
     }
 
@@ -149,6 +158,13 @@ impl Backend for ImageBased {
     fn take_timings(&mut self) -> Vec<(String, f64)> {
         std::mem::take(&mut self.timings)
     }
+    fn host_frame(&mut self) -> Option<&mut dyn HostFrame> {
+        if self.raster.is_some() {
+            Some(self)
+        } else {
+            None
+        }
+    }
     fn fallbacks(&self) -> Vec<String> {
         self.raster
             .as_ref()
@@ -159,5 +175,71 @@ impl Backend for ImageBased {
             })
             .into_iter()
             .collect()
+    }
+}
+
+impl HostFrame for ImageBased {
+    fn record_draw(&mut self, prep: &Prepared, cmd: vk::CommandBuffer) -> Result<()> {
+        let image = self.draw(prep)?;
+        let Some((ctx, _)) = &self.raster else {
+            return Err(crate::error::Error::Invalid(
+                "recording into a command buffer needs the GPU backend".into(),
+            ));
+        };
+        let ctx = ctx.clone();
+        let (w, h) = (image.width, image.height);
+        let bytes = w as u64 * h as u64 * 16;
+        if self
+            .host
+            .as_ref()
+            .map(|(i, _)| (i.extent.width, i.extent.height))
+            != Some((w, h))
+        {
+            let out = ImageDesc::new(
+                "ibr output",
+                w,
+                h,
+                vk::Format::R32G32B32A32_SFLOAT,
+                Purpose::FrameImages,
+            )
+            .create(&ctx)?;
+            let staging = Buffer::new(
+                &ctx,
+                "ibr output (staging)",
+                bytes,
+                vk::BufferUsageFlags::TRANSFER_SRC,
+                MemoryLocation::CpuToGpu,
+            )?;
+            self.host = Some((out, staging));
+        }
+        let (out, staging) = self.host.as_mut().expect("made above");
+        let k = self.exposure;
+        for (dst, p) in staging
+            .mapped_mut()?
+            .chunks_exact_mut(16)
+            .zip(&image.pixels)
+        {
+            for (c, v) in [p[0] * k, p[1] * k, p[2] * k, 1.0].iter().enumerate() {
+                dst[4 * c..4 * c + 4].copy_from_slice(&v.to_le_bytes());
+            }
+        }
+        transition(&ctx, cmd, &mut [(&mut *out, Access::TransferDst)]);
+        unsafe {
+            ctx.device.cmd_copy_buffer_to_image(
+                cmd,
+                staging.raw,
+                out.raw,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                &[crate::gpu::memory::copy_region(out.extent)],
+            )
+        };
+        transition(&ctx, cmd, &mut [(&mut *out, Access::Sampled)]);
+        Ok(())
+    }
+    fn output(&self) -> Option<&GpuImage> {
+        self.host.as_ref().map(|(i, _)| i)
+    }
+    fn set_exposure(&mut self, factor: f32) {
+        self.exposure = factor;
     }
 }
