@@ -106,11 +106,12 @@ struct ShadowView {
 };
 
 struct Light {
-    uvec4 kind_views;  // kind (0 directional, 1 point, 2 spot, 3 emitter sample), first view, view count
+    uvec4 kind_views;  // kind (0 directional, 1 point, 2 spot, 3 emitter sample), first view, view count, has cell
     vec4 position;
     vec4 direction;    // travel direction / spot axis / emitter normal
     vec4 power;        // rgb irradiance, intensity or radiance; w spot cut-off (radians)
     vec4 params;       // x spot beam width (radians) or emitter sample area
+    vec4 cell[3];      // an emitter sample's cell corners (xyz) where kind_views.w is 1
 };
 
 struct EmitterTriangle {

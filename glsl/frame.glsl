@@ -168,6 +168,60 @@ bool ar_incident(Light l, vec3 p, out vec3 travel, out vec3 irradiance) {
     return true;
 }
 
+// lights.rs projected_solid_angle: the cosine-weighted solid angle of triangle (a, b, c) seen
+// from p, over its part in front of p's plane of normal n (clipped to at most four corners;
+// written out, so no loop runs inside the loop over lights).
+float ar_cell_edge(vec3 x, vec3 y, vec3 n) {
+    vec3 c = cross(x, y);
+    float len = length(c);
+    return len > 0.0 ? atan(len, dot(x, y)) * dot(c, n) / len : 0.0;
+}
+
+void ar_clip_edge(vec3 s, vec3 e, vec3 n, inout vec3 poly[4], inout uint k) {
+    float ds = dot(s, n);
+    float de = dot(e, n);
+    if (ds > 0.0) {
+        poly[k] = s;
+        k++;
+    }
+    if ((ds > 0.0) != (de > 0.0)) {
+        poly[k] = s + (e - s) * (ds / (ds - de));
+        k++;
+    }
+}
+
+float ar_cell(Light l, vec3 p, vec3 n) {
+    vec3 a = l.cell[0].xyz - p;
+    vec3 b = l.cell[1].xyz - p;
+    vec3 c = l.cell[2].xyz - p;
+    vec3 poly[4] = vec3[4](vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
+    uint k = 0u;
+    ar_clip_edge(a, b, n, poly, k);
+    ar_clip_edge(b, c, n, poly, k);
+    ar_clip_edge(c, a, n, poly, k);
+    if (k < 3u) {
+        return 0.0;
+    }
+    float sum = ar_cell_edge(poly[0], poly[1], n) + ar_cell_edge(poly[1], poly[2], n);
+    sum += k == 4u ? ar_cell_edge(poly[2], poly[3], n) + ar_cell_edge(poly[3], poly[0], n)
+                   : ar_cell_edge(poly[2], poly[0], n);
+    return 0.5 * abs(sum);
+}
+
+// lights.rs irradiance_on: the irradiance `e` (from ar_incident) delivers on a surface of
+// normal n at p, `cosv` its cosine; an emitter sample with a cell gives its cell's, up to
+// CELL_FAR (1e3) cell areas of squared distance.
+vec3 ar_irradiance_on(Light l, vec3 e, float cosv, vec3 p, vec3 n) {
+    vec3 d = p - l.position.xyz;
+    if (l.kind_views.x == 3u && l.kind_views.w == 1u && dot(d, d) <= 1e3 * l.params.x) {
+        if (dot(p - l.cell[0].xyz, l.direction.xyz) <= 0.0) {
+            return vec3(0.0);
+        }
+        return l.power.rgb * ar_cell(l, p, n);
+    }
+    return e * cosv;
+}
+
 // shadow.rs ShadowMaps::visibility: tent-filtered percentage-closer lookup.
 float ar_visibility(Light l, vec3 p, vec3 n, float cosv) {
     // shadow.rs view_for: of a cube's faces, the one whose axis is nearest the direction.
@@ -252,7 +306,7 @@ vec3 ar_direct_radiance(vec3 p, vec3 n, vec3 ns, Material m, vec3 wo, uint begin
         }
         float v = ar_visibility(lights[i], p, n, cos_face);
         if (v > 0.0) {
-            l += ar_brdf(m, ns, travel, wo) * e * (cosv * v);
+            l += ar_brdf(m, ns, travel, wo) * ar_irradiance_on(lights[i], e, cosv, p, ns) * v;
         }
     }
     return l;

@@ -205,13 +205,15 @@ fn per_pixel(view: &View, x: u32, y: u32, f: impl Fn(DVec3) -> Option<f64>) -> O
 }
 
 /// A lone plane (no interreflection) under one light: every pixel shows kd/π · E with E the
-/// analytic irradiance (cosine, inverse square, spot fall-off), on both backends. No iterations,
+/// analytic irradiance (cosine, inverse square, spot fall-off; an emitter cell's projected solid
+/// angle, exact near it where a point's 1/r² is not), on both backends. No iterations,
 /// float32 tables: only direct light is drawn. `bounds[light]` bounds the worst pixel on the CPU,
 /// on the GPU, and on the GPU with float16 accumulation (see `common::gpu_bound`).
 #[test]
 fn direct_light_on_a_plane_matches_analytic_irradiance() {
-    // Measured: CPU 3.7e-8, 5.8e-8, 5.6e-8, 5.8e-8 (directional, point, spot, emitter sample:
-    // the f32 image's rounding); GPU 3.7e-8, 7.7e-7, 3.9e-3 (the spot's fall-off), 1.3e-6.
+    // Measured: CPU 3.7e-8, 5.8e-8, 5.6e-8, 5.8e-8, 5.6e-8 (directional, point, spot, emitter
+    // sample, emitter cell: the f32 image's rounding); GPU 3.7e-8, 7.7e-7, 3.9e-3 (the spot's
+    // fall-off), 1.3e-6, 1.35e-4 (the cell's edge angles in float32).
     // Bounds 3× those, at least 1e-5 on the GPU for another device's float32 arithmetic.
     direct_light_on_a_plane(
         None,
@@ -220,6 +222,7 @@ fn direct_light_on_a_plane_matches_analytic_irradiance() {
             [2e-7, 1e-5, 1e-5],
             [2e-7, 1.2e-2, 1.2e-2],
             [2e-7, 1e-5, 1e-5],
+            [2e-7, 4e-4, 4e-4],
         ],
     );
 }
@@ -239,13 +242,14 @@ fn direct_light_on_a_plane_with_the_default_iterations() {
             [2e-7, 1e-5, 1e-5],
             [2e-7, 1.2e-2, 1.2e-2],
             [2e-7, 1e-5, 1e-5],
+            [2e-7, 4e-4, 4e-4],
         ],
     );
 }
 
 /// [`direct_light_on_a_plane_matches_analytic_irradiance`] with `iterations` at the default
 /// settings (`None`: 0 iterations at 32 bins in float32).
-fn direct_light_on_a_plane(iterations: Option<usize>, bounds: [[f64; 3]; 4]) {
+fn direct_light_on_a_plane(iterations: Option<usize>, bounds: [[f64; 3]; 5]) {
     let kd = 0.5;
     let half = 3.0;
     let lights = [
@@ -269,6 +273,23 @@ fn direct_light_on_a_plane(iterations: Option<usize>, bounds: [[f64; 3]; 4]) {
             normal: DVec3::new(0.3, -1.0, -0.1).normalize(),
             radiance: DVec3::splat(40.0),
             area: 0.05,
+            cell: None,
+        },
+        // A cell of an emitter close over the plane: its exact (clipped) projected solid angle.
+        {
+            let c = [
+                DVec3::new(-0.6, 0.75, -0.4),
+                DVec3::new(0.7, 0.95, -0.2),
+                DVec3::new(0.1, 0.85, 0.6),
+            ];
+            let n = (c[1] - c[0]).cross(c[2] - c[0]).normalize();
+            Light::EmitterSample {
+                position: (c[0] + c[1] + c[2]) / 3.0,
+                normal: n,
+                radiance: DVec3::splat(2.0),
+                area: 0.5 * (c[1] - c[0]).cross(c[2] - c[0]).length(),
+                cell: Some(c),
+            }
         },
     ];
     for (light, bounds) in lights.into_iter().zip(bounds) {
@@ -327,10 +348,25 @@ fn direct_light_on_a_plane(iterations: Option<usize>, bounds: [[f64; 3]; 4]) {
                         / v.length_squared()
                 }
                 Light::EmitterSample {
+                    normal,
+                    radiance,
+                    cell: Some(c),
+                    ..
+                } => {
+                    let front = (p - c[0]).dot(*normal) > 0.0;
+                    let e = antiradiance::frame::lights::projected_solid_angle(c, p, DVec3::Y);
+                    if front {
+                        radiance.x * e
+                    } else {
+                        0.0
+                    }
+                }
+                Light::EmitterSample {
                     position,
                     normal,
                     radiance,
                     area,
+                    cell: None,
                 } => {
                     // A disc of `area` on its axis: L·A·cos_e·cos/(r² + A/π).
                     let v = *position - p;
@@ -359,6 +395,7 @@ fn direct_light_on_a_plane(iterations: Option<usize>, bounds: [[f64; 3]; 4]) {
                 .flat_map(|y| (0..48).map(move |x| (x, y)))
                 .filter_map(|(x, y)| expected(x, y))
                 .fold(0.0, f64::max);
+            assert!(peak > 0.0, "{}: no light on the plane", light.kind());
             for y in 0..48 {
                 for x in 0..48 {
                     if let Some(want) = expected(x, y) {
@@ -570,7 +607,8 @@ fn bundled_scenes_match_golden_images() {
     // light was shared among a pixel's samples (issue 30): 0.011, 0.0038, 0.021 from the
     // previous goldens at these small sizes (their own sizes: see
     // shared_direct_light_stays_within_0_005_of_per_sample_direct_light); GPU 9.2e-5, 2.9e-5,
-    // 6.2e-7.
+    // 6.2e-7. All three again when the emitter samples became cells with their exact irradiance
+    // (issue 32): 0.0010, 0.0009, 0.0016 relative RMSE from the previous goldens.
     for (name, width, height, limit_cpu, limit_gpu, limit_f16) in [
         ("cornell-box", 96, 96, 7e-7, 3e-4, 6e-4),
         ("cornell-box-glossy", 96, 96, 4e-8, 1e-4, 2.4e-4),

@@ -49,9 +49,11 @@ fn rel_rmse(a: &Image, b: &Image) -> f64 {
 /// A closed box (and a block inside) of albedo 0.5 emitting 1 everywhere. The cube holds the
 /// VPLs' light: at points over the floor (in the block's shadow too) it must equal what the
 /// same VPLs deliver gathered exactly (every VPL, visibility by a ray), within the cube's
-/// sampling. The image against Le/(1−ρ) = 2: the mean and the worst pixel are the VPLs' and the
-/// emitter samples' (instant radiosity, with the same VPLs and samples, is as far off; the
-/// corners take 32 emitter samples' direct light and the VPLs' clamped near field).
+/// sampling. The image against Le/(1−ρ) = 2: the mean and the worst pixel are the VPLs' (instant
+/// radiosity, with the same VPLs and samples, is as far off): the worst pixels lie along the
+/// room's edges, where the clamp bounds the VPLs' near field (at 2048 paths: mean −1.2%, worst
+/// 11%). The direct light is exact there: 32 emitter samples tile the box, each its cell's
+/// exact irradiance (as point samples: 0.71 of π on the floor, the image −8.1%).
 #[test]
 fn closed_uniform_box() {
     let mut s = uniform_enclosure(0.5, 1.0, 32, 0.25);
@@ -106,9 +108,9 @@ fn closed_uniform_box() {
         100.0 * worst
     );
     record("ibr.box.cube-rms", rms, 0.002);
-    // Measured 0.31% RMS, 0.94% worst (cube 128, hemicubes 128).
-    assert!(rms <= 0.006, "{rms}");
-    assert!(worst <= 0.02, "{worst}");
+    // Measured 0.50% RMS, 2.67% worst (cube 128, hemicubes 128).
+    assert!(rms <= 0.0075, "{rms}");
+    assert!(worst <= 0.04, "{worst}");
     let want = 2.0;
     for backend in [BackendKind::Cpu, BackendKind::Gpu] {
         let r = render_checked("image-based radiosity box", &s, options(backend));
@@ -131,9 +133,10 @@ fn closed_uniform_box() {
             d
         );
         record(&format!("ibr.box.{backend}"), mean.abs(), 0.01);
-        // Measured on both backends: mean −8.14%, worst 26.7%; 0.004 from instant radiosity.
-        assert!(mean.abs() <= 0.12, "{backend}: mean {mean}");
-        assert!(worst <= 0.35, "{backend}: worst {worst}");
+        record(&format!("ibr.box.{backend}.worst"), worst, 0.01);
+        // Measured on both backends: mean −2.62%, worst 15.8%; 0.004 from instant radiosity.
+        assert!(mean.abs() <= 0.04, "{backend}: mean {mean}");
+        assert!(worst <= 0.24, "{backend}: worst {worst}");
         assert!(d <= 0.01, "{backend}: {d}");
     }
 }

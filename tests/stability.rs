@@ -496,9 +496,10 @@ fn extreme_discretizations_run_on_both_backends() {
     let g = render_with("six orders of area", &s, Backend::Gpu);
     let e = worst_relative(&g, &c, 1.0);
     println!("six orders of area: GPU vs CPU worst pixel {e:.2e}");
-    // Measured 2.8e-5 (float32 tables by range; the lamp by emitter samples, whose shadow maps
-    // are rasterized on the GPU and ray cast on the CPU), bound 3×.
-    assert!(e < 1e-4, "{e}");
+    // Measured 7.3e-5 (float32 tables by range; the lamp by emitter cells, whose edge sums
+    // lose float32 precision on grazing floor pixels a few units away: 2.8e-5 with point
+    // samples), bound 2×.
+    assert!(e < 1.5e-4, "{e}");
     let _ = Precision::F16;
 }
 

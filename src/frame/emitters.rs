@@ -98,6 +98,50 @@ fn weight(ke: DVec3) -> f64 {
     lum.max(1e-3 * ke.element_sum() / 3.0)
 }
 
+/// `corners` labelled `[a, b, c]` so that a–c is the longest edge and b the opposite corner.
+fn longest_first(corners: [DVec3; 3]) -> [DVec3; 3] {
+    let [p, q, r] = corners;
+    let (pq, qr, rp) = (p.distance(q), q.distance(r), r.distance(p));
+    if qr >= pq && qr >= rp {
+        [q, p, r]
+    } else if rp >= pq {
+        [r, q, p]
+    } else {
+        [p, r, q]
+    }
+}
+
+/// `count` cells of triangle `[a, b, c]` (labelled as by [`longest_first`]) in the order of
+/// [`curve_cell`]'s curve, halving at the midpoint of a–c with ⌈count/2⌉ cells on the first half:
+/// for a power of two, `curve_cell`'s cells.
+fn bisect([a, b, c]: [DVec3; 3], count: usize, out: &mut Vec<[DVec3; 3]>) {
+    if count <= 1 {
+        out.push([a, b, c]);
+        return;
+    }
+    let m = 0.5 * (a + c);
+    let first = count.div_ceil(2);
+    bisect([a, m, b], first, out);
+    bisect([b, m, c], count - first, out);
+}
+
+/// Shares `n ≥ w.len()` samples among weights `w`: at least one each, the rest by largest
+/// remainders of `w`'s shares of what is left.
+fn shares(w: &[f64], n: usize) -> Vec<usize> {
+    let sum: f64 = w.iter().sum();
+    let rest = (n - w.len()) as f64;
+    let ideal: Vec<f64> = w.iter().map(|x| x / sum * rest).collect();
+    let mut counts: Vec<usize> = ideal.iter().map(|i| 1 + i.floor() as usize).collect();
+    let mut order: Vec<usize> = (0..w.len()).collect();
+    order.sort_by(|&a, &b| (ideal[b] - ideal[b].floor()).total_cmp(&(ideal[a] - ideal[a].floor())));
+    let mut k = 0;
+    while counts.iter().sum::<usize>() < n {
+        counts[order[k % order.len()]] += 1;
+        k += 1;
+    }
+    counts
+}
+
 /// The centroid of the cell of a triangle that parameter `s` ∈ [0, 1) falls in, after
 /// `levels` bisections along a Sierpiński curve (each triangle halved at the midpoint of the edge
 /// from its curve's entry to its exit; the first such edge the longest). Consecutive parameter
@@ -106,18 +150,7 @@ fn weight(ke: DVec3) -> f64 {
 /// even, which a point set warped onto the triangle does not give (measured: 3.9% off a square
 /// emitter's closed form at 32 samples, 0.4% with the cells).
 fn curve_cell(corners: [DVec3; 3], mut s: f64, levels: u32) -> DVec3 {
-    // Label the corners so that a–c is the longest edge and b the opposite corner.
-    let [p, q, r] = corners;
-    let (mut a, mut b, mut c) = {
-        let (pq, qr, rp) = (p.distance(q), q.distance(r), r.distance(p));
-        if qr >= pq && qr >= rp {
-            (q, p, r)
-        } else if rp >= pq {
-            (r, q, p)
-        } else {
-            (p, r, q)
-        }
-    };
+    let [mut a, mut b, mut c] = longest_first(corners);
     for _ in 0..levels {
         let m = 0.5 * (a + c);
         if s < 0.5 {
@@ -132,11 +165,15 @@ fn curve_cell(corners: [DVec3; 3], mut s: f64, levels: u32) -> DVec3 {
 }
 
 /// `n` stratified samples of `scene`'s emitting triangles (none when nothing emits or `n` is
-/// zero). Sample `k` takes the triangle at `(k + ½)/n` of the cumulative area × luminance and,
+/// zero). Where `n` is at least the emitting triangles' count, the samples tile them: each
+/// triangle takes its share of `n` by area × luminance (at least one), split by [`bisect`], and
+/// each sample is the centroid of its cell, carrying the cell and its area (its light is then
+/// the cell's exact unoccluded irradiance, see [`crate::frame::lights::irradiance_on`]).
+/// Otherwise sample `k` takes the triangle at `(k + ½)/n` of the cumulative area × luminance and,
 /// with the rest of that coordinate, the centroid of its cell of the triangle ([`curve_cell`],
 /// cells as many as the triangle's expected samples rounded up to a power of two); its
 /// area is the emitters' total weighted area over `n`, divided by its own `Ke`'s weight, so the
-/// samples sum to every emitter's power.
+/// samples sum to every emitter's power; it stands for its area as a point (no cell).
 pub fn sample(scene: &Scene, n: usize) -> Vec<Light> {
     struct Tri {
         corners: [DVec3; 3],
@@ -171,6 +208,24 @@ pub fn sample(scene: &Scene, n: usize) -> Vec<Light> {
     let (lo, hi) = scene.bounds();
     // Off the surface by a hair, so the emitter's own face never shadows its sample.
     let lift = (hi - lo).length() * 1e-6;
+    if n >= tris.len() {
+        // Every triangle its share of the samples (at least one), each sample a cell of a
+        // balanced bisection: the cells tile the emitters.
+        let counts = shares(&tris.iter().map(|t| t.weight).collect::<Vec<_>>(), n);
+        let mut out = Vec::with_capacity(n);
+        for (tri, &count) in tris.iter().zip(&counts) {
+            let mut cells = Vec::with_capacity(count);
+            bisect(longest_first(tri.corners), count, &mut cells);
+            out.extend(cells.into_iter().map(|c| Light::EmitterSample {
+                position: (c[0] + c[1] + c[2]) / 3.0 + tri.normal * lift,
+                normal: tri.normal,
+                radiance: tri.ke,
+                area: 0.5 * (c[1] - c[0]).cross(c[2] - c[0]).length(),
+                cell: Some(c),
+            }));
+        }
+        return out;
+    }
     let mut cumulative = Vec::with_capacity(tris.len());
     let mut acc = 0.0;
     for t in &tris {
@@ -193,6 +248,7 @@ pub fn sample(scene: &Scene, n: usize) -> Vec<Light> {
                 normal: tri.normal,
                 radiance: tri.ke,
                 area: total / (n as f64 * weight(tri.ke)),
+                cell: None,
             }
         })
         .collect()
@@ -284,6 +340,7 @@ mod tests {
                 normal,
                 radiance,
                 area,
+                ..
             } = *l
             else {
                 panic!("not an emitter sample");
@@ -303,5 +360,89 @@ mod tests {
         assert_eq!(sample(&s, 64), samples);
         assert!(sample(&Scene::empty(), 16).is_empty());
         assert!(sample(&s, 0).is_empty());
+        // Fewer samples than triangles: points without cells.
+        assert!(sample(&s, 3)
+            .iter()
+            .all(|l| matches!(l, Light::EmitterSample { cell: None, .. })));
+    }
+
+    /// Where the samples tile the emitters, their cells' light summed is the emitters' exact
+    /// unoccluded irradiance at any distance, the emitter's own corner included; a point's is
+    /// not (the 1/r² of a sample's centroid next to the emitter).
+    #[test]
+    fn tiling_cells_give_the_exact_irradiance() {
+        let mut s = Scene::empty();
+        let m = s.add_material(Material {
+            ke: DVec3::splat(2.0),
+            ..Material::diffuse("panel", 0.0)
+        });
+        // A 2×2 square at y = 1 facing down, centred over the origin.
+        s.add_mesh(
+            "panel",
+            vec![
+                DVec3::new(-1.0, 1.0, -1.0),
+                DVec3::new(1.0, 1.0, -1.0),
+                DVec3::new(1.0, 1.0, 1.0),
+                DVec3::new(-1.0, 1.0, 1.0),
+            ],
+            vec![[0, 1, 2], [0, 2, 3]],
+            m,
+        );
+        // On the axis at height 1 − h: four 1×1 rectangles with a corner over the point
+        // (E = π·L·F, F the corner form factor of a parallel rectangle).
+        let exact = |h: f64| {
+            let x: f64 = 1.0 / h;
+            let a = x / (1.0 + x * x).sqrt() * (x / (1.0 + x * x).sqrt()).atan();
+            let f = (a + a) / (2.0 * std::f64::consts::PI);
+            4.0 * std::f64::consts::PI * 2.0 * f
+        };
+        for n in [2, 5, 32] {
+            let samples = sample(&s, n);
+            let area: f64 = samples
+                .iter()
+                .map(|l| match *l {
+                    Light::EmitterSample { area, .. } => area,
+                    _ => 0.0,
+                })
+                .sum();
+            assert!((area - 4.0).abs() < 1e-12, "{n}: {area}");
+            for h in [0.01, 0.1, 1.0, 10.0] {
+                let p = DVec3::new(0.0, 1.0 - h, 0.0);
+                let e: f64 = samples
+                    .iter()
+                    .map(|l| {
+                        let inc = crate::frame::lights::incident(l, p).unwrap();
+                        crate::frame::lights::irradiance_on(l, &inc, p, DVec3::Y).x
+                    })
+                    .sum();
+                let want = exact(h);
+                assert!((e - want).abs() < 1e-9 * want, "{n} at {h}: {e} vs {want}");
+            }
+        }
+        // A receiver whose plane cuts the panel (a wall under its middle, facing +x): the
+        // clipped cells against a fine point quadrature of the half in front.
+        let (p, nx) = (DVec3::new(0.0, 0.5, 0.0), DVec3::X);
+        let e: f64 = sample(&s, 8)
+            .iter()
+            .map(|l| {
+                let inc = crate::frame::lights::incident(l, p).unwrap();
+                crate::frame::lights::irradiance_on(l, &inc, p, nx).x
+            })
+            .sum();
+        let k = 800;
+        let mut want = 0.0;
+        for i in 0..k {
+            for j in 0..k {
+                let q = DVec3::new(
+                    (i as f64 + 0.5) / k as f64,
+                    1.0,
+                    2.0 * (j as f64 + 0.5) / k as f64 - 1.0,
+                );
+                let v = q - p;
+                let r2 = v.length_squared();
+                want += 2.0 * (v.dot(nx) * 0.5) / (r2 * r2) * (2.0 / (k * k) as f64);
+            }
+        }
+        assert!((e - want).abs() < 1e-4 * want, "clipped: {e} vs {want}");
     }
 }

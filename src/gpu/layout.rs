@@ -280,7 +280,7 @@ pub struct GpuShadowView {
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct GpuLight {
     /// Kind (0 directional, 1 point, 2 spot, 3 emitter sample), first shadow view, view count,
-    /// unused.
+    /// 1 where an emitter sample has a cell.
     pub kind_views: [u32; 4],
     /// Position (xyz).
     pub position: [f32; 4],
@@ -291,6 +291,8 @@ pub struct GpuLight {
     pub power: [f32; 4],
     /// Spot beam width in radians or emitter sample area (x).
     pub params: [f32; 4],
+    /// An emitter sample's cell: its corners (xyz), where `kind_views.w` is 1.
+    pub cell: [[f32; 4]; 3],
 }
 
 /// An emitting triangle for the emitter edges of the compose pass (`EmitterTriangle` in

@@ -382,14 +382,21 @@ pub fn lights(lights: &[Light], maps: &ShadowMaps) -> Vec<GpuLight> {
                     normal,
                     radiance,
                     area,
+                    ..
                 } => (3, position, normal, radiance, 0.0, area),
             };
+            let cell = match *l {
+                Light::EmitterSample { cell: Some(c), .. } => Some(c),
+                _ => None,
+            };
+            let corner = |i: usize| cell.map_or([0.0; 4], |c| v4(c[i], 0.0));
             GpuLight {
-                kind_views: [kind, first, count, 0],
+                kind_views: [kind, first, count, cell.is_some() as u32],
                 position: v4(pos, 0.0),
                 direction: v4(dir, 0.0),
                 power: v4(power, cutoff as f32),
                 params: [beam as f32, 0.0, 0.0, 0.0],
+                cell: [corner(0), corner(1), corner(2)],
             }
         })
         .collect()

@@ -94,7 +94,8 @@ pub fn mix64(mut z: u64) -> u64 {
 }
 
 /// Points `0..n` of a `D`-dimensional Kronecker sequence shifted by a random offset drawn from
-/// `seed` (Cranley–Patterson rotation: unbiased, stratified, and uncorrelated between seeds).
+/// `seed` (Cranley–Patterson rotation: unbiased and stratified). Points of equal index under two
+/// seeds differ by a constant shift: draws that must be independent take different dimensions.
 pub struct Sequence<const D: usize> {
     alpha: [f64; D],
     offset: [f64; D],

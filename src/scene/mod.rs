@@ -140,6 +140,11 @@ pub enum Light {
         radiance: DVec3,
         /// Emitter area the sample stands for (m²).
         area: f64,
+        /// The emitter triangle's cell the sample stands for, where the samples tile the
+        /// emitters: its light is then the cell's exact unoccluded irradiance
+        /// ([`crate::frame::lights::irradiance_on`]), bounded and right next to the emitter.
+        /// None for a point patch (a VPL, or more emitting triangles than samples).
+        cell: Option<[DVec3; 3]>,
     },
 }
 

@@ -74,6 +74,7 @@ fn texel_rays_project_to_their_texels() {
         normal: tilted,
         radiance: DVec3::ONE,
         area: 0.01,
+        cell: None,
     });
     let maps = ShadowMaps::new(&scene, &scene.lights, 16, 8).unwrap();
     assert_eq!(maps.light_views, vec![(0, 1), (1, 6), (7, 5)]);

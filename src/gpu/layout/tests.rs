@@ -124,10 +124,18 @@ fn frame_records_match_glsl() {
         glsl_fields("ShadowView"),
         ["view_proj", "origin", "forward", "atlas", "right", "up"]
     );
-    assert_eq!(size_of::<GpuLight>(), 80);
+    assert_eq!(size_of::<GpuLight>(), 128);
+    assert_eq!(offset_of!(GpuLight, cell), 80);
     assert_eq!(
         glsl_fields("Light"),
-        ["kind_views", "position", "direction", "power", "params"]
+        [
+            "kind_views",
+            "position",
+            "direction",
+            "power",
+            "params",
+            "cell[3]"
+        ]
     );
     assert_eq!(size_of::<GpuEmitterTriangle>(), 64);
     assert_eq!(glsl_fields("EmitterTriangle"), ["c0", "c1", "c2", "ke"]);

@@ -221,6 +221,7 @@ mod tests {
             normal: -DVec3::Y,
             radiance: DVec3::splat(2.0),
             area: 1e-6,
+            cell: None,
         };
         let texel = Texel {
             dir: -DVec3::Y,

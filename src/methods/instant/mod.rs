@@ -6,8 +6,11 @@
 //! passes of either backend draw the method unchanged: a VPL is a [`Light::EmitterSample`].
 //!
 //! **Paths.** The scene's lights and its area emitters are sources; `vpls` paths are shared
-//! among them by power (largest remainders, at least one per source that has power), each with
-//! a low-discrepancy sequence (Kronecker, [`super::Sequence`]) for its start and every bounce.
+//! among them by power (largest remainders, at least one per source that has power). The starts
+//! of a source's paths are the points of a low-discrepancy sequence (Kronecker,
+//! [`super::Sequence`]), and so are each bounce's directions and roulette draws, over the paths
+//! in an order shuffled per bounce ("padding"): the same index in two bounces' sequences would
+//! give points a constant shift apart, deciding a survivor's next roulette by its last.
 //! Point lights start uniformly over the sphere, spots uniformly in the cone of their cut-off
 //! (weighted by the fall-off), directional lights on a disc across the scene's bounding sphere,
 //! area emitters at stratified points ([`crate::frame::emitters::sample`]) into the
@@ -216,6 +219,12 @@ pub fn trace(scene: &Scene, sys: &System, settings: &MethodSettings) -> Result<V
             *samples = emitters::sample(scene, n);
         }
         let seq = Sequence::<2>::new(0x1f5d_0000 + si as u64);
+        let bounces: Vec<(Sequence<3>, Vec<u32>)> = (0..MAX_BOUNCES as u64)
+            .map(|b| {
+                let seed = super::mix64((si as u64) << 32 | (b + 1));
+                (Sequence::<3>::new(seed), shuffled(n, seed))
+            })
+            .collect();
         for k in 0..n {
             let [u1, u2] = seq.point(k);
             let (origin, dir, flux) = match source {
@@ -268,6 +277,7 @@ pub fn trace(scene: &Scene, sys: &System, settings: &MethodSettings) -> Result<V
                         normal,
                         radiance,
                         area,
+                        ..
                     } = samples[k]
                     else {
                         unreachable!("emitters::sample makes emitter samples")
@@ -277,7 +287,7 @@ pub fn trace(scene: &Scene, sys: &System, settings: &MethodSettings) -> Result<V
                 }
             };
             follow(
-                sys, &caster, eps, lift, origin, dir, flux, si as u64, k, &mut raw,
+                sys, &caster, eps, lift, origin, dir, flux, &bounces, k, &mut raw,
             );
         }
     }
@@ -296,6 +306,7 @@ pub fn trace(scene: &Scene, sys: &System, settings: &MethodSettings) -> Result<V
             normal,
             radiance: flux / (PI * clamp_area),
             area: clamp_area,
+            cell: None,
         })
         .collect();
     vpls.ms = start.elapsed().as_secs_f64() * 1e3;
@@ -303,8 +314,8 @@ pub fn trace(scene: &Scene, sys: &System, settings: &MethodSettings) -> Result<V
 }
 
 /// Follows one light path from `origin` along `dir` carrying `flux`, appending a VPL
-/// (position, normal, reflected flux) at every front-side hit. Path `k` of source `source` takes
-/// point `k` of one sequence per bounce, so the paths of a source are stratified at every bounce.
+/// (position, normal, reflected flux) at every front-side hit. Bounce `b` of path `k` takes
+/// point `bounces[b].1[k]` of `bounces[b].0`.
 #[allow(clippy::too_many_arguments)]
 fn follow(
     sys: &System,
@@ -314,7 +325,7 @@ fn follow(
     mut origin: DVec3,
     mut dir: DVec3,
     mut flux: DVec3,
-    source: u64,
+    bounces: &[(Sequence<3>, Vec<u32>)],
     k: usize,
     out: &mut Vec<(DVec3, DVec3, DVec3)>,
 ) {
@@ -335,8 +346,8 @@ fn follow(
             return;
         }
         out.push((p + n * lift, n, reflected));
-        let seq = Sequence::<3>::new(super::mix64(source << 32 | (bounce as u64 + 1)));
-        let [u1, u2, u3] = seq.point(k);
+        let (seq, order) = &bounces[bounce];
+        let [u1, u2, u3] = seq.point(order[k] as usize);
         let q = kd.max_element().min(1.0);
         if u3 >= q {
             return;
@@ -345,6 +356,16 @@ fn follow(
         dir = sample_power_cosine(n, 1.0, u1, u2);
         origin = p + n * eps;
     }
+}
+
+/// A permutation of `0..n` drawn from `seed` (Fisher–Yates).
+fn shuffled(n: usize, seed: u64) -> Vec<u32> {
+    let mut order: Vec<u32> = (0..n as u32).collect();
+    for i in (1..n).rev() {
+        let r = super::mix64(seed ^ (i as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
+        order.swap(i, (r % (i as u64 + 1)) as usize);
+    }
+    order
 }
 
 #[cfg(test)]
