@@ -192,3 +192,102 @@ fn a_deep_stack_of_boards_settles_damped() {
         assert!(s.iterations <= 64, "{backend}: {} iterations", s.iterations);
     });
 }
+
+/// A scene file that gives no iteration count is solved until the monitor's estimated error is
+/// [`DEFAULT_TOLERANCE`] (at most [`DEFAULT_ITERATION_CAP`] iterations), so a closed room gets
+/// the iterations it needs: a closed unit box whose every wall emits 1 and reflects 0.9 is
+/// Le/(1−ρ) = 10 everywhere, where the paper's fixed 4 iterations give 1 + 0.9 + … + 0.9⁴ = 4.1.
+/// A count given by the file or by `--iterations` runs exactly.
+#[test]
+fn a_scene_file_without_a_count_iterates_to_the_default_tolerance() {
+    use antiradiance::scene::{load_scene, DEFAULT_ITERATION_CAP, DEFAULT_TOLERANCE};
+    let dir = std::env::temp_dir().join(format!("antiradiance-settles-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // Eight corners (1 + x + 2y + 4z), six quads wound to face into the box.
+    let mut obj = String::from("mtllib box.mtl\nusemtl wall\n");
+    for z in 0..2 {
+        for y in 0..2 {
+            for x in 0..2 {
+                obj += &format!("v {x} {y} {z}\n");
+            }
+        }
+    }
+    obj += "f 1 5 6 2\nf 3 4 8 7\nf 1 3 7 5\nf 2 6 8 4\nf 1 2 4 3\nf 5 7 8 6\n";
+    std::fs::write(dir.join("box.obj"), obj).unwrap();
+    std::fs::write(
+        dir.join("box.mtl"),
+        "newmtl wall\nKd 0.9 0.9 0.9\nKe 1 1 1\n",
+    )
+    .unwrap();
+    let camera = "[camera]\neye = [0.5, 0.5, 0.9]\ntarget = [0.5, 0.4, 0.0]\nfov_y_deg = 90\nwidth = 12\nheight = 12\n";
+    let scene = |solver: &str| {
+        let path = dir.join("box.toml");
+        std::fs::write(
+            &path,
+            format!("{camera}\n[solver]\nbins = 32\nelement_size = 0.5\n{solver}\n[[object]]\nmesh = \"box.obj\"\n"),
+        )
+        .unwrap();
+        load_scene(&path).unwrap()
+    };
+    let auto = scene("");
+    assert_eq!(auto.solver.tolerance, Some(DEFAULT_TOLERANCE));
+    assert_eq!(auto.solver.max_iterations, DEFAULT_ITERATION_CAP);
+    let fixed = scene("iterations = 4");
+    assert_eq!(fixed.solver.tolerance, None);
+    let mean = |r: &antiradiance::engine::Rendered| {
+        let p = &r.image.pixels;
+        p.iter()
+            .map(|c| c.iter().map(|&v| v as f64).sum::<f64>() / 3.0)
+            .sum::<f64>()
+            / p.len() as f64
+    };
+    let options = |backend, iterations| Options {
+        solver: SolverOverrides {
+            iterations,
+            ..Default::default()
+        },
+        ..Options::backend(backend)
+    };
+    for backend in [Backend::Cpu, Backend::Gpu] {
+        let r = render_checked("closed box, no count", &auto, options(backend, None));
+        let s = &r.stats;
+        let m = mean(&r);
+        let worst = r
+            .image
+            .pixels
+            .iter()
+            .flat_map(|c| c.iter())
+            .map(|&v| (v as f64 / 10.0 - 1.0).abs())
+            .fold(0.0, f64::max);
+        println!(
+            "closed box {backend}, no count: {} iterations, estimated error {:?}, mean {m:.4} (10 expected), worst pixel {:.2}% off, fallbacks {:?}, warnings {:?}, decisions {:?}",
+            s.iterations, s.estimated_error, 100.0 * worst, s.fallbacks, s.warnings, s.decisions
+        );
+        assert!(s.warnings.is_empty(), "{backend}: {:?}", s.warnings);
+        assert!(s.iterations > 4, "{backend}: {} iterations", s.iterations);
+        assert!(
+            s.decisions.iter().any(|d| d.contains("estimated error")),
+            "{:?}",
+            s.decisions
+        );
+        assert!(s.estimated_error.unwrap() <= DEFAULT_TOLERANCE);
+        // Measured: CPU 44 iterations, estimate 8.8e-3, mean −1.1% (worst pixel 3.5%, an edge);
+        // GPU 28, 4.4e-3, −0.2% (2.6%). The fixed 4: mean 4.09.
+        assert!((m / 10.0 - 1.0).abs() < 0.03, "{backend}: mean {m}");
+        // The count in the file, or asked for, runs exactly and stops short.
+        for (name, scene, overrides) in [
+            ("the file's 4", &fixed, None),
+            ("--iterations 4", &auto, Some(4)),
+        ] {
+            let r = render_checked(name, scene, options(backend, overrides));
+            let m4 = mean(&r);
+            println!(
+                "closed box {backend}, {name}: {} iterations, mean {m4:.4}",
+                r.stats.iterations
+            );
+            assert_eq!(r.stats.iterations, 4, "{backend} {name}");
+            assert!(m4 < 0.6 * m, "{backend} {name}: mean {m4}");
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -49,7 +49,13 @@ impl SolverOverrides {
         s.element_size = self.element_size.unwrap_or(s.element_size);
         s.oracle = self.oracle.unwrap_or(s.oracle);
         s.antiradiance_steps = self.antiradiance_steps.unwrap_or(s.antiradiance_steps);
-        s.tolerance = self.tolerance.or(s.tolerance);
+        // A count asked for here runs exactly (the scene's tolerance, its own or the file
+        // default, gives way), unless a tolerance is asked for too.
+        s.tolerance = match (self.tolerance, self.iterations) {
+            (Some(t), _) => Some(t),
+            (None, Some(_)) => None,
+            (None, None) => s.tolerance,
+        };
         s.max_iterations = self.max_iterations.unwrap_or(s.max_iterations);
         s.filter_cutoff = self.filter_cutoff.unwrap_or(s.filter_cutoff);
         s.emitter_samples = self.emitter_samples.or(s.emitter_samples);

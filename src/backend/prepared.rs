@@ -216,6 +216,12 @@ impl Prepared {
         {
             plan.decisions.push(emitter_choice.reason);
         }
+        if let Some(t) = settings.tolerance {
+            plan.decisions.push(format!(
+                "iterations: until the estimated error (distance to the discrete fixed point) is below {t:.0e}, at most {}",
+                settings.max_iterations
+            ));
+        }
         let (maps, fallbacks) =
             fit_shadow_maps(scene, &lights, options.shadow_map_size, usize::MAX)?;
         Ok(Self {

@@ -82,9 +82,8 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene> {
         .solver
         .as_ref()
         .is_some_and(|s| s.element_size.is_some());
-    if let Some(s) = &file.solver {
-        scene.solver = solver_settings(s, path)?;
-    }
+    // Without a `[solver]` table too: a file's defaults ([`SolverSettings::for_file`]).
+    scene.solver = solver_settings(file.solver.as_ref().unwrap_or(&Default::default()), path)?;
     if let Some(c) = &file.camera {
         scene.camera = camera(c, path)?;
     }
@@ -155,6 +154,7 @@ pub fn load_gltf_scene(path: &Path) -> Result<Scene> {
     let bytes = files::read_bytes(path).map_err(|p| scene_err(path, format!("glTF file {p}")))?;
     let mut scene = Scene::empty();
     scene.path = Some(path.to_path_buf());
+    scene.solver = super::SolverSettings::for_file();
     let mut warned = BTreeSet::new();
     let none = Default::default();
     let place = super::gltf_scene::Placement {

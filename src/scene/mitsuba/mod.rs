@@ -59,6 +59,7 @@ pub fn parse_mitsuba_scene(text: &str, path: &Path) -> Result<Scene> {
     };
     let mut scene = Scene::empty();
     scene.path = Some(path.to_path_buf());
+    scene.solver = crate::scene::SolverSettings::for_file();
     let mut camera = None;
     for node in root.children().filter(Node::is_element) {
         match node.tag_name().name() {
