@@ -367,8 +367,8 @@ mod tests {
     }
 
     /// Where the samples tile the emitters, their cells' light summed is the emitters' exact
-    /// unoccluded irradiance at any distance, the emitter's own corner included; a point's is
-    /// not (the 1/r² of a sample's centroid next to the emitter).
+    /// unoccluded irradiance at any distance (1% to 10 times the panel's size), and that of a
+    /// receiver whose plane cuts the panel.
     #[test]
     fn tiling_cells_give_the_exact_irradiance() {
         let mut s = Scene::empty();
@@ -396,6 +396,16 @@ mod tests {
             let f = (a + a) / (2.0 * std::f64::consts::PI);
             4.0 * std::f64::consts::PI * 2.0 * f
         };
+        // The samples' light on a receiver at `p` of normal `n`.
+        let irradiance = |samples: &[Light], p: DVec3, n: DVec3| -> f64 {
+            samples
+                .iter()
+                .map(|l| {
+                    let inc = crate::frame::lights::incident(l, p).unwrap();
+                    crate::frame::lights::irradiance_on(l, &inc, p, n).x
+                })
+                .sum()
+        };
         for n in [2, 5, 32] {
             let samples = sample(&s, n);
             let area: f64 = samples
@@ -408,13 +418,7 @@ mod tests {
             assert!((area - 4.0).abs() < 1e-12, "{n}: {area}");
             for h in [0.01, 0.1, 1.0, 10.0] {
                 let p = DVec3::new(0.0, 1.0 - h, 0.0);
-                let e: f64 = samples
-                    .iter()
-                    .map(|l| {
-                        let inc = crate::frame::lights::incident(l, p).unwrap();
-                        crate::frame::lights::irradiance_on(l, &inc, p, DVec3::Y).x
-                    })
-                    .sum();
+                let e = irradiance(&samples, p, DVec3::Y);
                 let want = exact(h);
                 assert!((e - want).abs() < 1e-9 * want, "{n} at {h}: {e} vs {want}");
             }
@@ -422,13 +426,7 @@ mod tests {
         // A receiver whose plane cuts the panel (a wall under its middle, facing +x): the
         // clipped cells against a fine point quadrature of the half in front.
         let (p, nx) = (DVec3::new(0.0, 0.5, 0.0), DVec3::X);
-        let e: f64 = sample(&s, 8)
-            .iter()
-            .map(|l| {
-                let inc = crate::frame::lights::incident(l, p).unwrap();
-                crate::frame::lights::irradiance_on(l, &inc, p, nx).x
-            })
-            .sum();
+        let e = irradiance(&sample(&s, 8), p, nx);
         let k = 800;
         let mut want = 0.0;
         for i in 0..k {

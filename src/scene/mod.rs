@@ -305,9 +305,9 @@ pub const MAX_EMITTER_SAMPLES: usize = 4096;
 
 /// `solver.tolerance` of a scene file that gives neither `iterations` nor `tolerance`: the
 /// iteration runs until the monitor's estimated error is 1%. Measured (32², CPU): the Cornell
-/// box 8 iterations, Veach 16, MNRoom 52 (its file's 6 leave 0.12, the image 3.4% RMS from a
-/// solve to 1e-3; 36 iterations to 5e-2 leave 0.2%), Veach's indirectly lit room 16 (its
-/// file's 8: 8.2%). The breakfast room's damped iteration stays near 1.5e-2 to the cap, for an
+/// box 8 iterations, MNRoom 52 (its file's 6 leave an estimate of 0.12, the image 3.4% RMS from
+/// a solve to 1e-3; 36 iterations to 5e-2 leave 0.2%), Veach's indirectly lit room 16 (its
+/// file's 8: estimate 1.2e-2, image 8.2% from converged). The breakfast room's damped iteration stays near 1.5e-2 to the cap, for an
 /// image no nearer the path tracer's than at 4 (its file states 4).
 pub const DEFAULT_TOLERANCE: f64 = 1e-2;
 

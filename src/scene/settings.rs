@@ -5,8 +5,8 @@ use super::format::SolverDesc;
 use super::limits::{max_elements_limit, MIN_RELATIVE_RESOLUTION};
 use super::load::scene_err;
 use super::{
-    Precision, Scene, Scheme, SolverSettings, DEFAULT_ITERATION_CAP, DEFAULT_TOLERANCE,
-    MAX_ANTIRADIANCE_STEPS, MAX_ITERATIONS, RELATIVE_ELEMENT_SIZE,
+    Precision, Scene, Scheme, SolverSettings, MAX_ANTIRADIANCE_STEPS, MAX_ITERATIONS,
+    RELATIVE_ELEMENT_SIZE,
 };
 use crate::error::Result;
 use std::path::Path;
@@ -46,7 +46,12 @@ const ITERATION_CAP: &str = "a cap: the iteration converges in tens of steps, an
 /// The `[solver]` table, checked. `element_size` keeps the default until
 /// [`resolve_element_size`] knows the scene's size.
 pub fn solver_settings(s: &SolverDesc, path: &Path) -> Result<SolverSettings> {
-    let d = SolverSettings::default();
+    // A file that states neither a count nor a tolerance gets the monitor's (issue 36).
+    let d = if s.iterations.is_none() && s.tolerance.is_none() {
+        SolverSettings::for_file()
+    } else {
+        SolverSettings::default()
+    };
     let bins = match s.bins {
         None => d.bins,
         Some(x) if x >= 1 => x as usize,
@@ -111,11 +116,8 @@ pub fn solver_settings(s: &SolverDesc, path: &Path) -> Result<SolverSettings> {
             "solver.max_elements",
             path,
         )?,
-        // A file that states neither a count nor a tolerance gets the monitor's: a closed room
-        // the iterations it needs, an open one few (issue 36).
         tolerance: match s.tolerance {
-            None if s.iterations.is_none() => Some(DEFAULT_TOLERANCE),
-            None => None,
+            None => d.tolerance,
             Some(t) if t.is_finite() && t > 0.0 && t < 1.0 => Some(t),
             Some(t) => {
                 return Err(scene_err(
@@ -126,11 +128,7 @@ pub fn solver_settings(s: &SolverDesc, path: &Path) -> Result<SolverSettings> {
         },
         max_iterations: count(
             s.max_iterations,
-            if s.iterations.is_none() && s.tolerance.is_none() {
-                DEFAULT_ITERATION_CAP
-            } else {
-                d.max_iterations
-            },
+            d.max_iterations,
             MAX_ITERATIONS,
             ITERATION_CAP,
             "solver.max_iterations",
