@@ -168,43 +168,38 @@ bool ar_incident(Light l, vec3 p, out vec3 travel, out vec3 irradiance) {
     return true;
 }
 
-// lights.rs projected_solid_angle: the cosine-weighted solid angle of triangle (a, b, c) seen
-// from p, over its part in front of p's plane of normal n (clipped to at most four corners;
-// written out, so no loop runs inside the loop over lights).
+// lights.rs projected_solid_angle: the cosine-weighted solid angle of a cell seen from p, over
+// its part in front of p's plane of normal n. Written without a polygon array: each edge
+// contributes its part in front, and where the plane cuts the cell one closing edge runs along
+// it from the point where an edge leaves the front to the point where another enters (local
+// arrays indexed per pixel are slow on llvmpipe: that form cost the compose pass 68%).
 float ar_cell_edge(vec3 x, vec3 y, vec3 n) {
     vec3 c = cross(x, y);
     float len = length(c);
+    // A degenerate edge (the closing edge where the plane does not cut the cell) adds nothing.
     return len > 0.0 ? atan(len, dot(x, y)) * dot(c, n) / len : 0.0;
 }
 
-void ar_clip_edge(vec3 s, vec3 e, vec3 n, inout vec3 poly[4], inout uint k) {
+float ar_cell_side(vec3 s, vec3 e, vec3 n, inout vec3 leave, inout vec3 enter) {
     float ds = dot(s, n);
     float de = dot(e, n);
-    if (ds > 0.0) {
-        poly[k] = s;
-        k++;
-    }
-    if ((ds > 0.0) != (de > 0.0)) {
-        poly[k] = s + (e - s) * (ds / (ds - de));
-        k++;
-    }
+    vec3 x = s + (e - s) * (ds / (ds - de));
+    bool fs = ds > 0.0;
+    bool fe = de > 0.0;
+    leave += fs && !fe ? x : vec3(0.0);
+    enter += !fs && fe ? x : vec3(0.0);
+    return fs || fe ? ar_cell_edge(fs ? s : x, fe ? e : x, n) : 0.0;
 }
 
 float ar_cell(Light l, vec3 p, vec3 n) {
     vec3 a = l.cell[0].xyz - p;
     vec3 b = l.cell[1].xyz - p;
     vec3 c = l.cell[2].xyz - p;
-    vec3 poly[4] = vec3[4](vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
-    uint k = 0u;
-    ar_clip_edge(a, b, n, poly, k);
-    ar_clip_edge(b, c, n, poly, k);
-    ar_clip_edge(c, a, n, poly, k);
-    if (k < 3u) {
-        return 0.0;
-    }
-    float sum = ar_cell_edge(poly[0], poly[1], n) + ar_cell_edge(poly[1], poly[2], n);
-    sum += k == 4u ? ar_cell_edge(poly[2], poly[3], n) + ar_cell_edge(poly[3], poly[0], n)
-                   : ar_cell_edge(poly[2], poly[0], n);
+    vec3 leave = vec3(0.0);
+    vec3 enter = vec3(0.0);
+    float sum = ar_cell_side(a, b, n, leave, enter) + ar_cell_side(b, c, n, leave, enter)
+              + ar_cell_side(c, a, n, leave, enter);
+    sum += ar_cell_edge(leave, enter, n);
     return 0.5 * abs(sum);
 }
 

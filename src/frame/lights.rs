@@ -206,34 +206,40 @@ pub const CELL_FAR: f64 = 1e3;
 
 /// Projected solid angle (the integral of the cosine to `n`) of triangle `c` seen from `p`,
 /// over its part in front of `p`'s plane of normal `n`: Lambert's ½ Σ θ_e (γ̂_e · n) over the
-/// clipped polygon's edges. `glsl/frame.glsl`'s `ar_cell` mirrors it.
+/// clipped polygon's edges. Each edge contributes its part in front; where the plane cuts the
+/// triangle, one closing edge runs along the plane from the point where an edge leaves the front
+/// to the point where another enters. `glsl/frame.glsl`'s `ar_cell` is the same sum.
 pub fn projected_solid_angle(c: &[DVec3; 3], p: DVec3, n: DVec3) -> f64 {
+    // One edge's term; a degenerate edge adds nothing.
+    let edge = |x: DVec3, y: DVec3| {
+        let cross = x.cross(y);
+        let len = cross.length();
+        // The angle by atan2: exact for the small angles of a distant cell.
+        if len > 0.0 {
+            len.atan2(x.dot(y)) * cross.dot(n) / len
+        } else {
+            0.0
+        }
+    };
     let q = c.map(|x| x - p);
-    let mut poly = [DVec3::ZERO; 4];
-    let mut k = 0;
+    let (mut leave, mut enter) = (DVec3::ZERO, DVec3::ZERO);
+    let mut sum = 0.0;
     for i in 0..3 {
         let (s, e) = (q[i], q[(i + 1) % 3]);
         let (ds, de) = (s.dot(n), e.dot(n));
-        if ds > 0.0 {
-            poly[k] = s;
-            k += 1;
+        let (fs, fe) = (ds > 0.0, de > 0.0);
+        let x = s + (e - s) * (ds / (ds - de));
+        if fs && !fe {
+            leave = x;
         }
-        if (ds > 0.0) != (de > 0.0) {
-            poly[k] = s + (e - s) * (ds / (ds - de));
-            k += 1;
+        if !fs && fe {
+            enter = x;
         }
-    }
-    let mut sum = 0.0;
-    for i in 0..k {
-        let (x, y) = (poly[i], poly[(i + 1) % k]);
-        let cross = x.cross(y);
-        let len = cross.length();
-        if len > 0.0 {
-            // The angle by atan2: exact for the small angles of a distant cell.
-            sum += len.atan2(x.dot(y)) * cross.dot(n) / len;
+        if fs || fe {
+            sum += edge(if fs { s } else { x }, if fe { e } else { x });
         }
     }
-    0.5 * sum.abs()
+    0.5 * (sum + edge(leave, enter)).abs()
 }
 
 /// Radiance reflected toward `wo` at surface point `p` from every analytic light, shadowed by
