@@ -53,8 +53,9 @@ fn rel_rmse(a: &Image, b: &Image) -> f64 {
 /// radiosity, with the same VPLs and samples, is as far off): the worst pixels lie along the
 /// room's edges, where the clamp bounds the VPLs' near field (at 2048 paths: mean −1.2%, worst
 /// 11%; VPLs as cells of the triangle they land on: 9.0% at 1024 paths against the disc's 11.9%,
-/// but the Cornell box 0.148 → 0.224, docs/measurements.md). The direct light is exact there: 32 emitter samples tile the box, each its cell's
-/// exact irradiance (as point samples: 0.71 of π on the floor, the image −8.1%).
+/// but the Cornell box 0.148 → 0.224, docs/measurements.md). The direct light is exact there:
+/// 32 emitter samples tile the box, each its cell's exact irradiance (as point samples: 0.71 of
+/// π on the floor, the image −8.1%).
 #[test]
 fn closed_uniform_box() {
     let mut s = uniform_enclosure(0.5, 1.0, 32, 0.25);
