@@ -13,10 +13,15 @@ layout(location = 2) out vec4 out_normal;  // interpolated shading normal (not n
 
 void main() {
     // Back-to-back twins (the two faces of a two-sided surface) lie at one depth: the face
-    // turned toward the eye wins the tie (reversed depth, GREATER: a back face is pushed a few
-    // ulps farther), as the CPU ray caster prefers it (raycast.rs closest).
+    // turned toward the eye wins the tie, as the CPU ray caster prefers it (raycast.rs
+    // closest). Reversed depth, GREATER: a back face is pushed farther by a few ulps of its
+    // depth and by a small part of its depth's step per pixel, since each triangle's depth plane
+    // is rounded by about its slope times the pixel coordinate's ulp: at grazing views the
+    // twins' depths differed by more than the ulps alone (the corridors' zero-thickness walls
+    // showed their black backs in a third of a wall's pixels).
     bool front = dot(pc.eye.xyz - world, elements[leaf].face_normal.xyz) > 0.0;
-    gl_FragDepth = front ? gl_FragCoord.z : gl_FragCoord.z * (1.0 - 4.0e-7);
+    float z = gl_FragCoord.z;
+    gl_FragDepth = front ? z : max(z - (4.0e-7 * z + 4.0e-4 * fwidth(z)), 0.0);
     out_position = vec4(world, emits != 0u ? -float(leaf + 1u) : float(leaf + 1u));
     // A splatted sample's bin toward the eye, found once here instead of by each of the ~4
     // splats that cover it: the splatted leaves lie in its plane (surfaces.rs display_bin).
