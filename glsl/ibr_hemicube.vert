@@ -13,12 +13,15 @@ layout(push_constant) uniform IbrFace {
 
 layout(location = 0) in vec3 position;
 layout(location = 1) in uint slot;
+layout(location = 2) in vec3 normal;  // the face's unit normal
 layout(location = 0) out vec3 rel;
 layout(location = 1) flat out uint id;
+layout(location = 2) flat out float side;
 
 void main() {
     id = slot + 1u;
     rel = position - pc.eye.xyz;
+    side = dot(rel, normal);
     float w = dot(rel, pc.forward.xyz);
     float y = dot(rel, pc.up.xyz);
     // A side face keeps up in [0, 1]: NDC 2·up − 1 over its H/2 rows.

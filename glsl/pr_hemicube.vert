@@ -12,6 +12,7 @@ layout(location = 0) in vec3 position;
 layout(location = 1) in uint leaf;
 layout(location = 0) out vec3 rel;
 layout(location = 1) flat out uint id;
+layout(location = 2) flat out float side;
 
 void main() {
     id = leaf + 1u;
@@ -19,6 +20,7 @@ void main() {
     if (s == PR_NONE) {
         // Nothing to shoot: outside the clip volume.
         rel = vec3(0.0);
+        side = 0.0;
         gl_Position = vec4(0.0, 0.0, 2.0, 1.0);
         return;
     }
@@ -28,5 +30,6 @@ void main() {
     pr_basis(n, t, b);
     pr_face(pc.face, n, t, b, fw, rt, up);
     rel = position - eye;
+    side = dot(rel, leaves[leaf].normal.xyz);
     gl_Position = vec4(dot(rel, rt), -dot(rel, up), pc.near, dot(rel, fw));
 }

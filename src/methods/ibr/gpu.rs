@@ -14,7 +14,6 @@ use crate::gpu::memory::{Buffer, Image, ImageDesc, Purpose, DEPTH_FORMAT};
 use crate::gpu::passes::{begin_rendering_with_depth, end_rendering, Load};
 use crate::gpu::pipelines::{self, Layouts, PipelineDesc, Target};
 use crate::gpu::Context;
-use crate::methods::progressive::shooter::PrVertex;
 use crate::reference::sampling::basis;
 use crate::scene::Light;
 use ash::vk;
@@ -29,6 +28,16 @@ struct IbrFace {
     forward: [f32; 4],
     right: [f32; 4],
     up: [f32; 4],
+}
+
+/// A face slot's corner (`glsl/ibr_hemicube.vert`): its normal tells the shader which of two
+/// back-to-back twins faces the VPL.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default)]
+struct IbrVertex {
+    position: [f32; 3],
+    slot: u32,
+    normal: [f32; 3],
 }
 
 fn v4(v: DVec3, w: f32) -> [f32; 4] {
@@ -53,14 +62,16 @@ impl GpuHemicubes {
     /// For `surf`'s face slots, hemicubes of side `size` (even), `batch` at a time.
     pub fn new(ctx: &Arc<Context>, surf: &Surfaces, size: u32, batch: usize) -> Result<Self> {
         let size = size.max(2) & !1;
-        let vertices: Vec<PrVertex> = surf
+        let vertices: Vec<IbrVertex> = surf
             .corners
             .iter()
+            .zip(&surf.normal)
             .enumerate()
-            .flat_map(|(i, c)| {
-                c.map(|p| PrVertex {
+            .flat_map(|(i, (c, n))| {
+                c.map(|p| IbrVertex {
                     position: [p.x as f32, p.y as f32, p.z as f32],
-                    leaf: i as u32,
+                    slot: i as u32,
+                    normal: [n.x as f32, n.y as f32, n.z as f32],
                 })
             })
             .collect();
@@ -105,10 +116,11 @@ impl GpuHemicubes {
                 vert: "ibr_hemicube.vert",
                 frag: "pr_hemicube.frag",
                 topology: vk::PrimitiveTopology::TRIANGLE_LIST,
-                stride: std::mem::size_of::<PrVertex>() as u32,
+                stride: std::mem::size_of::<IbrVertex>() as u32,
                 attributes: &[
                     (vk::Format::R32G32B32_SFLOAT, 0),
                     (vk::Format::R32_UINT, 12),
+                    (vk::Format::R32G32B32_SFLOAT, 16),
                 ],
                 targets: &targets,
                 specialization: &[],
