@@ -11,8 +11,9 @@ void main() {
     item = id;
     dist = length(rel);
     // Back-to-back twins (a two-sided surface's two faces) lie at one depth: the face turned
-    // toward the eye wins the tie, as the CPU ray caster prefers it (raycast.rs closest), by the
-    // same slope-scaled push as gbuffer.frag's (reversed depth, GREATER: farther is smaller).
+    // toward the eye wins the tie, as the CPU ray caster prefers it (raycast.rs closest), by a
+    // slope-scaled push like gbuffer.frag's but larger (reversed depth, GREATER: farther is
+    // smaller): the G-buffer's 4e-7 of the depth left 0.18% of a two-sided box's texels wrong.
     float z = gl_FragCoord.z;
     gl_FragDepth = side < 0.0 ? z : max(z - (1.0e-5 * z + 1.0e-2 * fwidth(z)), 0.0);
 }
