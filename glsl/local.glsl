@@ -94,8 +94,9 @@ void ar_local() {
             tot = base * r_t + sky;
             vec3 ke = AR_EMISSION ? mat.ke.rgb * pc.environment.a : vec3(0.0);
             // Light arriving at the back in bin j is blocked: antiradiance out the front.
-            // Not on a closed solid's surface (src/solids.rs): attr_leaf z is 2 where it blocks.
-            vec3 blocked = AR_ANTIRADIANCE && lf.z > 1.5 ? ar_lt(row, j, odd) : vec3(0.0);
+            // Not on a closed solid's surface (src/solids.rs): attr_leaf z is negative where it
+            // blocks (src/gpu/pack.rs attributes).
+            vec3 blocked = AR_ANTIRADIANCE && lf.z < 0.0 ? ar_lt(row, j, odd) : vec3(0.0);
             // The first bounce of direct light, reflected once for the whole solve
             // (src/solver/local.rs direct_exitant), adds to I_ex only.
             vec3 first = AR_DIRECT ? texelFetch(direct, p, 0).rgb : vec3(0.0);

@@ -1,7 +1,8 @@
 #version 450
 // Push at an even depth (top-down, one draw per depth): L_push(node) = L_in(node) + the parent's
 // pushed value, which odd depths keep in the L_in image (glsl/push_odd.frag). Written into the
-// L_push image. At a leaf the parent's value is added on its front only (push.glsl).
+// L_push image. At a leaf the parent's value is added on its front only, times the leaf's push
+// factor (push.glsl).
 #include "push.glsl"
 
 layout(binding = AR_BINDING_L_IN) uniform sampler2D l_in;
@@ -14,7 +15,7 @@ void main() {
     uint j = ar_in_bin_at(p);
     vec3 v = texelFetch(l_in, p, 0).rgb;
     if (other != 0xffffffffu && ar_pushes(row, j)) {
-        v += texelFetch(l_in, ar_in_texel(other, j), 0).rgb;
+        v += ar_push_factor(row) * texelFetch(l_in, ar_in_texel(other, j), 0).rgb;
     }
     // A float16 target rounds what it stores (emulated: the target is float32).
     pushed = vec4(AR_ROUND_WIDTH != 0u ? vec3(ar_round_f16(v.r), ar_round_f16(v.g), ar_round_f16(v.b)) : v, 0.0);

@@ -16,6 +16,7 @@ use std::collections::HashMap;
 use std::time::Instant;
 
 mod follow;
+pub mod receivers;
 
 /// Per-leaf constants of the local pass (the GPU stores them as element attribute images).
 #[derive(Debug, Clone, PartialEq)]
@@ -72,6 +73,9 @@ pub struct System {
     /// Scenes with keyframed objects: what moves and which links a frame recomputes (the
     /// links are made for the whole motion, [`crate::bound`]); `None` for still scenes.
     pub bound: Option<crate::bound::Bound>,
+    /// Per leaf (in the order of `leaves`), the factor on the radiance pushed to it from its
+    /// ancestors ([`receivers`]); empty: 1 everywhere (moving scenes, or turned off).
+    pub push_scale: Vec<f64>,
 }
 
 /// Cosine margin of [`System::reads`]: bins this close to a leaf's plane count as read.
@@ -283,7 +287,14 @@ impl System {
             occlusion: None,
             energy_normalization: None,
             bound: None,
+            push_scale: Vec::new(),
         };
+        // Still scenes only (receivers::applies).
+        if receivers::applies(&sys, scene, settings) {
+            let t = Instant::now();
+            sys.push_scale = receivers::push_scales(&sys);
+            sys.links.linking_ms += t.elapsed().as_secs_f64() * 1e3;
+        }
         if let Some(b) = bound {
             // The moving links' values at this pose exactly as every frame will compute them.
             let t = Instant::now();
@@ -360,6 +371,15 @@ impl System {
         }
     }
 
+    /// The factor on the radiance pushed to `node` from its ancestors: a leaf's
+    /// [`System::push_scale`], 1 for clusters.
+    pub fn push_factor(&self, node: u32) -> f64 {
+        match self.leaf_slot[node as usize] {
+            u32::MAX => 1.0,
+            slot => self.push_scale.get(slot as usize).copied().unwrap_or(1.0),
+        }
+    }
+
     /// The element of leaf `li` (index into [`System::leaves`]).
     pub fn leaf_element(&self, li: usize) -> &Element {
         &self.elements[self.hierarchy.element(self.leaves[li].node).expect("leaf") as usize]
@@ -394,11 +414,7 @@ pub const POWER_ROUNDS: usize = 200;
 /// push, the local pass's reflection and antiradiance, pull), so it needs a third of the
 /// memory of the solver's tables.
 fn transport_radius(sys: &System, antiradiance: bool) -> Option<f64> {
-    use rayon::prelude::*;
     let (rows, m) = (sys.rows(), sys.bins.count);
-    let h = &sys.hierarchy;
-    let links = &sys.links;
-    let mut i_ex = vec![0.0; rows * m];
     let mut l_in = vec![0.0; rows * m];
     let mut l_push = vec![0.0; rows * m];
     let cos: Vec<Vec<f64>> = sys
@@ -421,79 +437,46 @@ fn transport_radius(sys: &System, antiradiance: bool) -> Option<f64> {
             .sum()
     };
     // Local pass (white Lambertian): front bins a·c·cos·(E/π − L), back bins −a·c·|cos|·L.
-    let local = |i_ex: &mut [f64], l_push: &[f64], uniform: bool| {
+    let local = |i_ex: &mut [f64], l_push: &[f64]| {
         for (l, cj) in sys.leaves.iter().zip(&cos) {
             let r = l.node as usize;
             let lp = &l_push[r * m..(r + 1) * m];
-            let e: f64 = if uniform {
-                std::f64::consts::PI
-            } else {
-                lp.iter()
-                    .zip(cj)
-                    .filter(|(_, &c)| c < 0.0)
-                    .map(|(v, c)| v * -c)
-                    .sum::<f64>()
-                    * sys.bins.omega
-                    * l.cos_norm
-            };
+            let e: f64 = lp
+                .iter()
+                .zip(cj)
+                .filter(|(_, &c)| c < 0.0)
+                .map(|(v, c)| v * -c)
+                .sum::<f64>()
+                * sys.bins.omega
+                * l.cos_norm;
             let row = &mut i_ex[r * m..(r + 1) * m];
             for j in 0..m {
                 let k = l.area * l.cos_norm;
                 row[j] = if cj[j] > 0.0 {
                     // Light arriving at the back is blocked (the local pass's front bins).
-                    let blocked = if antiradiance && !uniform && l.blocks_back {
+                    let blocked = if antiradiance && l.blocks_back {
                         lp[j]
                     } else {
                         0.0
                     };
                     k * cj[j] * (e / std::f64::consts::PI - blocked)
-                } else if cj[j] < 0.0 && antiradiance && !uniform {
+                } else if cj[j] < 0.0 && antiradiance {
                     k * cj[j] * lp[j]
                 } else {
                     0.0
                 };
             }
         }
-        // Pull: children follow their parent in pre-order, so a backward sweep sees them first.
-        for i in (0..h.len()).rev() {
-            if let crate::hierarchy::NodeKind::Cluster([a, b]) = h.nodes[i].kind {
-                for j in 0..m {
-                    i_ex[i * m + j] = i_ex[a as usize * m + j] + i_ex[b as usize * m + j];
-                }
-            }
-        }
+        receivers::pull_sums(sys, i_ex);
     };
-    local(&mut i_ex, &l_push, true);
+    // Uniform radiance 1 everywhere to start from.
+    let mut i_ex = receivers::unit_field(sys);
     let mut lambda = f64::NAN;
     for _ in 0..POWER_ROUNDS {
         let before = flux(&i_ex);
-        l_in.par_chunks_mut(m).enumerate().for_each(|(r, row)| {
-            row.fill(0.0);
-            for l in &links.links[links.offsets[r] as usize..links.offsets[r + 1] as usize] {
-                let v = i_ex[l.sender as usize * m + l.sender_bin as usize] * l.form_factor;
-                if let Some(spread) = sys.filters.row(l.cone, l.receiver_bin as u32) {
-                    for &(j, w) in spread {
-                        if sys.reads(l, j as usize) {
-                            row[j as usize] += v * w as f64;
-                        }
-                    }
-                }
-            }
-        });
-        for (i, node) in h.nodes.iter().enumerate() {
-            let (head, tail) = l_push.split_at_mut(i * m);
-            let dst = &mut tail[..m];
-            dst.copy_from_slice(&l_in[i * m..(i + 1) * m]);
-            if node.parent != u32::MAX {
-                let p = node.parent as usize;
-                for (j, (d, s)) in dst.iter_mut().zip(&head[p * m..(p + 1) * m]).enumerate() {
-                    if sys.pushes(i as u32, j) {
-                        *d += s;
-                    }
-                }
-            }
-        }
-        local(&mut i_ex, &l_push, false);
+        receivers::gather(sys, &i_ex, &mut l_in);
+        receivers::push_down(sys, &l_in, &mut l_push);
+        local(&mut i_ex, &l_push);
         let ratio = flux(&i_ex) / before;
         if !ratio.is_finite() || ratio <= 0.0 {
             return None;

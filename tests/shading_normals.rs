@@ -428,8 +428,10 @@ fn indirect_light_on_a_smooth_sphere_against_the_path_tracer() {
             100.0 * bias
         );
         // Measured: relative RMSE 0.1245 on both backends (of it the reference's noise 0.065),
-        // mean +1.27% (the mean's own noise about 0.2%). Bounds 1.5×.
-        assert!(rmse < 0.19, "{backend:?}: {rmse}");
-        assert!(bias.abs() < 0.02, "{backend:?}: {bias}");
+        // mean +1.27% (the mean's own noise about 0.2%). With the receiver calibration of the
+        // push (issue 36), which this scene's 21,448 leaves are now past (receivers::MAX_LEAVES),
+        // 0.1325 and +2.82%. Bounds 1.5× of the latter.
+        assert!(rmse < 0.2, "{backend:?}: {rmse}");
+        assert!(bias.abs() < 0.043, "{backend:?}: {bias}");
     }
 }

@@ -85,8 +85,10 @@ pub fn attributes(sys: &System, layout: &TableLayout) -> (Vec<[f32; 4]>, Vec<[f3
         let n = leaf.normal;
         na[i] = [n.x as f32, n.y as f32, n.z as f32, leaf.area as f32];
         let odd = sys.hierarchy.nodes[leaf.node as usize].depth % 2;
-        // z: a leaf (non-zero); 2 where light arriving at its back is blocked.
-        let z = if leaf.blocks_back { 2.0 } else { 1.0 };
+        // z: a leaf (non-zero): its push factor (System::push_factor, positive), negated where
+        // light arriving at its back is blocked.
+        let k = sys.push_factor(leaf.node) as f32;
+        let z = if leaf.blocks_back { -k } else { k };
         lf[i] = [leaf.cos_norm as f32, leaf.material as f32, z, odd as f32];
     }
     (na, lf)
@@ -449,13 +451,15 @@ mod tests {
         let layout = TableLayout::with_column_height(sys.rows() as u32, 32, 16384, 3).unwrap();
         let (na, lf) = attributes(&sys, &layout);
         assert_eq!(na.len(), (layout.columns * layout.rows_per_column) as usize);
-        // 1 marks a leaf row, 2 a leaf that blocks light from behind (a lone plane does).
-        let rows_with_leaf = lf.iter().filter(|t| t[2] == 1.0 || t[2] == 2.0).count();
+        // A leaf row holds its push factor, negated where the leaf blocks light from behind (a
+        // lone plane does); other rows 0.
+        let rows_with_leaf = lf.iter().filter(|t| t[2] != 0.0).count();
         assert_eq!(rows_with_leaf, sys.leaves.len());
         assert!(sys.leaves.iter().all(|l| l.blocks_back));
-        assert_eq!(lf.iter().filter(|t| t[2] == 2.0).count(), sys.leaves.len());
         for leaf in &sys.leaves {
             let (x, y) = layout.row_texel(leaf.node);
+            let z = lf[(y * layout.columns + x) as usize][2];
+            assert_eq!(z, -(sys.push_factor(leaf.node) as f32), "blocking leaf's factor");
             let t = na[(y * layout.columns + x) as usize];
             assert_eq!(t[1], 1.0, "normal is +y");
             assert!((t[3] as f64 - leaf.area).abs() < 1e-6);

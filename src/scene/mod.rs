@@ -298,6 +298,10 @@ pub struct SolverSettings {
     /// (`frame::cpu::shared_direct`; on the Cornell box the compose pass 1,071 → 429 ms), which
     /// can differ at a penumbra sharper than a pixel (low resolutions).
     pub direct_per_sample: bool,
+    /// Whether each leaf scales the radiance pushed from its ancestors by how much more or
+    /// less of their senders it sees than they do ([`crate::system::receivers`]; computed for
+    /// still scenes); off, every leaf takes its cluster's radiance as it is (the paper's push).
+    pub receiver_calibration: bool,
 }
 
 /// Most emitter samples (each has six shadow-map faces).
@@ -348,6 +352,7 @@ impl Default for SolverSettings {
             face_clusters: true,
             extrapolate: true,
             direct_per_sample: false,
+            receiver_calibration: true,
         }
     }
 }

@@ -134,6 +134,15 @@ fn record(pipelines: &[Owned<vk::Pipeline>; 2], p: &Pass<'_>, res: &mut Resource
                 (&mut *target, Access::Attachment),
             ],
         );
+        // The leaves' normals and push factors (push.glsl).
+        transition(
+            p.ctx,
+            p.cmd,
+            &mut [
+                (&mut im.attr_normal_area, Access::Sampled),
+                (&mut im.attr_leaf, Access::Sampled),
+            ],
+        );
         begin_rendering(p.ctx, p.cmd, &[(&*target, Load::Keep)]);
         p.bind(&pipelines[odd as usize], target.extent, bins);
         p.draw_range(
