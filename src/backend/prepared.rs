@@ -216,8 +216,9 @@ impl Prepared {
         {
             plan.decisions.push(emitter_choice.reason);
         }
-        plan.decisions
-            .extend(crate::system::receivers::decision(&system, scene, &settings));
+        plan.decisions.extend(crate::system::receivers::decision(
+            &system, scene, &settings,
+        ));
         if let Some(t) = settings.tolerance {
             plan.decisions.push(format!(
                 "iterations: until the estimated error (distance to the discrete fixed point) is below {t:.0e}, at most {}",

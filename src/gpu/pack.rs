@@ -459,7 +459,11 @@ mod tests {
         for leaf in &sys.leaves {
             let (x, y) = layout.row_texel(leaf.node);
             let z = lf[(y * layout.columns + x) as usize][2];
-            assert_eq!(z, -(sys.push_factor(leaf.node) as f32), "blocking leaf's factor");
+            assert_eq!(
+                z,
+                -(sys.push_factor(leaf.node) as f32),
+                "blocking leaf's factor"
+            );
             let t = na[(y * layout.columns + x) as usize];
             assert_eq!(t[1], 1.0, "normal is +y");
             assert!((t[3] as f64 - leaf.area).abs() < 1e-6);

@@ -160,11 +160,16 @@ fn element_psa(sys: &System, li: usize, k: usize) -> f64 {
     let e = sys.leaf_element(k);
     let v = p - e.center;
     let d2 = v.length_squared();
-    let reach = FAR * (h.nodes[leaf.node as usize].radius + h.nodes[sys.leaves[k].node as usize].radius);
+    let reach =
+        FAR * (h.nodes[leaf.node as usize].radius + h.nodes[sys.leaves[k].node as usize].radius);
     if d2 > reach * reach {
         let d = d2.sqrt();
         let (cs, cr) = (e.normal.dot(v) / d, -leaf.normal.dot(v) / d);
-        return if cs > 0.0 && cr > 0.0 { e.area * cs * cr / d2 } else { 0.0 };
+        return if cs > 0.0 && cr > 0.0 {
+            e.area * cs * cr / d2
+        } else {
+            0.0
+        };
     }
     let mut sum = 0.0;
     for f in &e.faces {
