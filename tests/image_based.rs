@@ -49,13 +49,12 @@ fn rel_rmse(a: &Image, b: &Image) -> f64 {
 /// A closed box (and a block inside) of albedo 0.5 emitting 1 everywhere. The cube holds the
 /// VPLs' light: at points over the floor (in the block's shadow too) it must equal what the
 /// same VPLs deliver gathered exactly (every VPL, visibility by a ray), within the cube's
-/// sampling. The image against Le/(1−ρ) = 2: the mean and the worst pixel are the VPLs' (instant
-/// radiosity, with the same VPLs and samples, is as far off): the worst pixels lie along the
-/// room's edges, where the clamp bounds the VPLs' near field (at 2048 paths: mean −1.2%, worst
-/// 11%; VPLs as cells of the triangle they land on: 9.0% at 1024 paths against the disc's 11.9%,
-/// but the Cornell box 0.148 → 0.224, docs/measurements.md). The direct light is exact there:
-/// 32 emitter samples tile the box, each its cell's exact irradiance (as point samples: 0.71 of
-/// π on the floor, the image −8.1%).
+/// sampling. The image against Le/(1−ρ) = 2: the VPLs' clamp takes their near field along the
+/// room's edges and in its corners (instant radiosity with the same VPLs: mean −2.5%, worst
+/// 16%); the cube gathers it back (`near`), leaving the VPLs' own sampling error, smooth
+/// patches of a few percent at 256 paths. The direct light is exact there: 32 emitter samples
+/// tile the box, each its cell's exact irradiance (as point samples: 0.71 of π on the floor,
+/// the image −8.1%).
 #[test]
 fn closed_uniform_box() {
     let mut s = uniform_enclosure(0.5, 1.0, 32, 0.25);
@@ -127,19 +126,27 @@ fn closed_uniform_box() {
             .collect();
         let worst = errs.iter().fold(0.0f64, |m, e| m.max(e.abs()));
         let mean = errs.iter().sum::<f64>() / errs.len() as f64;
-        let d = rel_rmse(&r.image, &ir.image);
+        let ir_worst = ir
+            .image
+            .pixels
+            .iter()
+            .fold(0.0f64, |m, p| m.max(((p[0] as f64 - want) / want).abs()));
         println!(
-            "{backend}: against Le/(1−ρ) mean {:+.2}%, worst {:.2}%; against instant radiosity {:.3}",
+            "{backend}: against Le/(1−ρ) mean {:+.2}%, worst {:.2}%; instant radiosity's worst {:.2}%",
             100.0 * mean,
             100.0 * worst,
-            d
+            100.0 * ir_worst
         );
         record(&format!("ibr.box.{backend}"), mean.abs(), 0.01);
         record(&format!("ibr.box.{backend}.worst"), worst, 0.01);
-        // Measured on both backends: mean −2.62%, worst 15.8%; 0.004 from instant radiosity.
-        assert!(mean.abs() <= 0.04, "{backend}: mean {mean}");
-        assert!(worst <= 0.24, "{backend}: worst {worst}");
-        assert!(d <= 0.01, "{backend}: {d}");
+        // Measured on both backends: mean −1.29%, worst 9.5% (−2.62% and 15.8% with
+        // `--near-rays 0`, instant radiosity's 15.8%).
+        assert!(mean.abs() <= 0.02, "{backend}: mean {mean}");
+        assert!(worst <= 0.13, "{backend}: worst {worst}");
+        assert!(
+            worst < 0.8 * ir_worst,
+            "{backend}: {worst} against {ir_worst}"
+        );
     }
 }
 

@@ -34,6 +34,9 @@ pub struct MethodSettings {
     /// Image-based radiosity: cells of the layered depth cube along the scene's longest side
     /// (its hemicubes are `hemicube` texels a side).
     pub cube: u32,
+    /// Image-based radiosity: rays per cube layer that gather back the light the clamp takes
+    /// from the VPLs' near field (0: the clamped cube, as the paper has it).
+    pub near_rays: u32,
 }
 
 impl Default for MethodSettings {
@@ -47,6 +50,7 @@ impl Default for MethodSettings {
             vpls: DEFAULT_VPLS,
             vpl_clamp: DEFAULT_VPL_CLAMP,
             cube: DEFAULT_CUBE,
+            near_rays: DEFAULT_NEAR_RAYS,
         }
     }
 }
@@ -58,6 +62,10 @@ pub const DEFAULT_VPLS: u32 = 256;
 /// Default resolution of image-based radiosity's layered depth cube (cells along the longest
 /// side); the paper keeps the hemicubes' faces about as fine.
 pub const DEFAULT_CUBE: u32 = 128;
+
+/// Default rays per cube layer restoring image-based radiosity's near field (README,
+/// "Baselines"; docs/measurements.md, "Image-based radiosity").
+pub const DEFAULT_NEAR_RAYS: u32 = 16;
 
 /// Default clamp of instant radiosity: a VPL's disc is the surface area it stands for.
 pub const DEFAULT_VPL_CLAMP: f64 = 1.0;
@@ -119,6 +127,12 @@ impl MethodSettings {
         }
         if !(4..=2048).contains(&self.cube) {
             return bad(format!("--cube must be 4..=2048, got {}", self.cube));
+        }
+        if self.near_rays > 4096 {
+            return bad(format!(
+                "--near-rays must be 0..=4096, got {}",
+                self.near_rays
+            ));
         }
         if let Some(0) = self.shots_per_iteration {
             return bad("--shots-per-iteration must be at least 1".into());

@@ -162,6 +162,10 @@ pub struct BaselineArgs {
     /// image-based-radiosity: cells of the layered depth cube along the scene's longest side.
     #[arg(long, default_value_t = antiradiance::methods::DEFAULT_CUBE)]
     pub cube: u32,
+    /// image-based-radiosity: rays per cube layer that gather back the light the VPLs' clamp
+    /// takes from their near field (0: the clamped cube).
+    #[arg(long, default_value_t = antiradiance::methods::DEFAULT_NEAR_RAYS)]
+    pub near_rays: u32,
 }
 
 impl BaselineArgs {
@@ -176,6 +180,7 @@ impl BaselineArgs {
             vpls: self.vpls,
             vpl_clamp: self.vpl_clamp,
             cube: self.cube,
+            near_rays: self.near_rays,
         }
     }
 }

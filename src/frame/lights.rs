@@ -146,6 +146,32 @@ pub struct Receiver {
     pub wo: DVec3,
 }
 
+/// The lights of `range` that reach the front of a surface at `p` (face normal `n`, facing
+/// the side the light must arrive on): each with its incident light and its shadow-map
+/// visibility (> 0).
+fn reaching<'a>(
+    lights: &'a [Light],
+    maps: &'a ShadowMaps,
+    p: DVec3,
+    n: DVec3,
+    range: Range<usize>,
+) -> impl Iterator<Item = (&'a Light, Incident, f64)> + 'a {
+    lights
+        .iter()
+        .enumerate()
+        .take(range.end)
+        .skip(range.start)
+        .filter_map(move |(i, light)| {
+            let inc = incident(light, p)?;
+            let cos_face = -inc.travel.dot(n);
+            if cos_face <= 0.0 {
+                return None;
+            }
+            let v = maps.visibility(i, p, n, cos_face);
+            (v > 0.0).then_some((light, inc, v))
+        })
+}
+
 /// [`direct_radiance`] from the lights `range` of `lights`.
 pub fn direct_radiance_from(
     lights: &[Light],
@@ -155,23 +181,22 @@ pub fn direct_radiance_from(
     range: Range<usize>,
 ) -> DVec3 {
     let mut l = DVec3::ZERO;
-    for (i, light) in lights.iter().enumerate().take(range.end).skip(range.start) {
-        let Some(inc) = incident(light, r.p) else {
-            continue;
-        };
-        let cos_face = -inc.travel.dot(r.n);
-        let cos = -inc.travel.dot(r.shading);
-        if cos_face <= 0.0 || cos <= 0.0 {
-            continue;
-        }
-        let v = maps.visibility(i, r.p, r.n, cos_face);
-        if v > 0.0 {
+    for (light, inc, v) in reaching(lights, maps, r.p, r.n, range) {
+        if -inc.travel.dot(r.shading) > 0.0 {
             l += brdf(mat, r.shading, inc.travel, r.wo)
                 * irradiance_on(light, &inc, r.p, r.shading)
                 * v;
         }
     }
     l
+}
+
+/// The shadowed irradiance every light delivers at `p` on a surface of unit normal `n` (the
+/// front): [`direct_radiance`]'s light before a BRDF.
+pub fn direct_irradiance(lights: &[Light], maps: &ShadowMaps, p: DVec3, n: DVec3) -> DVec3 {
+    reaching(lights, maps, p, n, 0..lights.len())
+        .map(|(light, inc, v)| irradiance_on(light, &inc, p, n) * v)
+        .sum()
 }
 
 /// Irradiance that `light`, arriving as `inc` (from [`incident`]), delivers on a surface at `p`

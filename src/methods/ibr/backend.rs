@@ -87,7 +87,7 @@ impl Solve for ImageBased {
             .push(("shadow".into(), t.elapsed().as_secs_f64() * 1e3));
         let lift = super::lift(&prep.system);
         let surf = &prep.surfaces;
-        let built = match &mut self.raster {
+        let mut built = match &mut self.raster {
             Some((_, raster)) => {
                 let mut cast = |lights: &[crate::scene::Light]| raster.cast(lights, surf, lift);
                 super::build(&prep.scene, &prep.system, surf, &self.settings, &mut cast)?
@@ -97,7 +97,30 @@ impl Solve for ImageBased {
                 super::build(&prep.scene, &prep.system, surf, &self.settings, &mut cast)?
             }
         };
-        for k in ["hemicube_ms", "warp_ms"] {
+        let near = super::near::NearField {
+            caster: &self.caster,
+            surf,
+            sys: &prep.system,
+            lights: &prep.lights,
+            maps: &prep.maps,
+            lift,
+        };
+        let restored = super::near::restore(
+            &mut built.cube,
+            &near,
+            built.clamp_area,
+            self.settings.near_rays,
+        );
+        for (k, v) in [
+            ("near_rays", self.settings.near_rays as f64),
+            ("near_hits", restored.hits as f64),
+            ("near_share", restored.share),
+            ("near_ms", restored.ms),
+        ] {
+            built.report.figures.insert(k.into(), v);
+        }
+        built.report.setup_ms += restored.ms;
+        for k in ["hemicube_ms", "warp_ms", "near_ms"] {
             self.timings
                 .push((k.trim_end_matches("_ms").into(), built.report.figures[k]));
         }

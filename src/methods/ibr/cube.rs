@@ -22,6 +22,15 @@ pub struct Layer {
     pub d: f64,
     /// Irradiance (W/m² per channel) summed over the virtual lights.
     pub irradiance: DVec3,
+    /// The first sample's point: where the layer's direct light and near field are evaluated
+    /// ([`super::near`]).
+    pub point: DVec3,
+    /// The direct light's irradiance at `point` (only [`super::near`] reads it: the frame
+    /// computes its own per pixel).
+    pub direct: DVec3,
+    /// The irradiance the VPLs' clamp left out of their near field, restored by
+    /// [`super::near::restore`] (zero until then).
+    pub near: DVec3,
     /// The current light's samples in this layer: their sum, their count, and whether they are
     /// the light's own samples (1) or splatted copies (2); 0 where the light has none.
     sum: DVec3,
@@ -141,6 +150,9 @@ impl Ldi<'_> {
                     normal: n,
                     d: p.dot(n),
                     irradiance: DVec3::ZERO,
+                    point: p,
+                    direct: DVec3::ZERO,
+                    near: DVec3::ZERO,
                     sum: DVec3::ZERO,
                     count: 0,
                     kind: 0,
@@ -255,10 +267,16 @@ impl Cube {
         self.dropped.iter().sum()
     }
 
-    /// The irradiance at `p` (unit normal `n`): the LDI of `n`, the 2×2 cells nearest `p`
-    /// weighted bilinearly (the paper's averaging kernel), each where it has a layer on `p`'s
-    /// plane; zero where none has.
+    /// The indirect irradiance at `p` (unit normal `n`): the VPLs' and their restored near
+    /// field's, by [`Cube::lookup`].
     pub fn irradiance(&self, p: DVec3, n: DVec3) -> DVec3 {
+        self.lookup(p, n, |l| l.irradiance + l.near)
+    }
+
+    /// `value` of the layers at `p` (unit normal `n`): the LDI of `n`, the 2×2 cells nearest
+    /// `p` weighted bilinearly (the paper's averaging kernel), each where it has a layer on
+    /// `p`'s plane; zero where none has.
+    pub fn lookup(&self, p: DVec3, n: DVec3, value: impl Fn(&Layer) -> DVec3) -> DVec3 {
         let axis = axis_of(n);
         let grid = self.grid();
         let (u, v) = grid.coords(axis, p);
@@ -279,7 +297,7 @@ impl Cube {
                 continue;
             };
             if let Some(k) = grid.find(&self.ldis[axis][cell], p, n) {
-                sum += self.ldis[axis][cell][k].irradiance * w;
+                sum += value(&self.ldis[axis][cell][k]) * w;
                 wsum += w;
             }
         }
@@ -287,6 +305,18 @@ impl Cube {
             sum / wsum
         } else {
             DVec3::ZERO
+        }
+    }
+
+    /// Every layer, in a fixed order (LDI, cell, layer).
+    pub fn layers_iter(&self) -> impl Iterator<Item = &Layer> {
+        self.ldis.iter().flatten().flatten()
+    }
+
+    /// Sets every layer, in [`Cube::layers_iter`]'s order, from `values`.
+    pub fn set_layers(&mut self, values: &[DVec3], mut set: impl FnMut(&mut Layer, DVec3)) {
+        for (l, &v) in self.ldis.iter_mut().flatten().flatten().zip(values) {
+            set(l, v);
         }
     }
 

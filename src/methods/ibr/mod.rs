@@ -19,6 +19,11 @@
 //! pixel); the cube holds the indirect light only, as the VPLs do. Diffuse only: a glossy
 //! material's lobe reflects no indirect light here.
 //!
+//! **The clamp's near field** ([`near`]): the VPLs' clamp takes a tenth of the indirect light
+//! along a room's edges and in its corners; once the cube is built, each layer gathers it back
+//! from the surfaces near it, with the light the cube holds there (bias compensation, once per
+//! layer rather than per pixel and frame). `--near-rays 0` leaves the paper's clamped cube.
+//!
 //! **View independence**: the cube is built when the lights are prepared, not per frame: a
 //! camera that moves only reconstructs.
 
@@ -26,6 +31,7 @@ pub mod backend;
 pub mod cube;
 pub mod gpu;
 pub mod hemicube;
+pub mod near;
 
 use super::{instant, MethodReport, MethodSettings};
 use crate::frame::cpu::SampleIndirect;
@@ -70,6 +76,8 @@ pub struct Built {
     pub cube: Cube,
     /// The VPLs, the cube's size and the time each step took (`figures`).
     pub report: MethodReport,
+    /// The VPLs' clamp disc (m²), whose near field [`near::restore`] gives back.
+    pub clamp_area: f64,
 }
 
 /// The cube's bounds: the scene's.
@@ -132,7 +140,11 @@ pub fn build(
     ] {
         report.figures.insert(k.into(), v);
     }
-    Ok(Built { cube, report })
+    Ok(Built {
+        cube,
+        report,
+        clamp_area: vpls.clamp_area,
+    })
 }
 
 /// How far a VPL's hemicube rays leave its surface (progressive refinement's shooter offset).
