@@ -161,6 +161,8 @@ fn bad_settings_name_the_field() {
         ("camera.fov_y_deg", "[camera]\neye = [0,0,1]\ntarget = [0,0,0]\nfov_y_deg = 0\n"),
         ("camera.supersample", "[camera]\neye = [0,0,1]\ntarget = [0,0,0]\nsupersample = 0\n"),
         ("camera.supersample", "[camera]\neye = [0,0,1]\ntarget = [0,0,0]\nsupersample = 9\n"),
+        ("camera.passes", "[camera]\neye = [0,0,1]\ntarget = [0,0,0]\npasses = 0\n"),
+        ("camera.passes", "[camera]\neye = [0,0,1]\ntarget = [0,0,0]\npasses = 17\n"),
         ("light[0].beam_width_deg", "[[light]]\ntype = \"spot\"\nposition = [0,1,0]\ntarget = [0,0,0]\nintensity = 1\ncutoff_deg = 30\nbeam_width_deg = 40\n"),
     ] {
         let p = write(&d, "s.toml", &format!("{toml}[[object]]\nmesh = \"q.obj\"\n"));

@@ -94,6 +94,8 @@ pub struct Options {
     pub height: Option<u32>,
     /// Supersampling replacing the camera's ([`crate::scene::Camera::supersample`]).
     pub supersample: Option<u32>,
+    /// Shifted passes of the frame replacing the camera's ([`crate::scene::Camera::passes`]).
+    pub passes: Option<u32>,
     /// Side of each shadow map (texels).
     pub shadow_map_size: u32,
     /// Device to render on (GPU backend; a host's device when embedding); `None` creates a
@@ -132,6 +134,7 @@ impl Default for Options {
             width: None,
             height: None,
             supersample: None,
+            passes: None,
             shadow_map_size: 1024,
             context: None,
             device: None,
@@ -287,6 +290,14 @@ impl Options {
         if !(1..=max).contains(&k) {
             return Err(Error::Invalid(format!(
                 "--supersample must be in 1..={max}, got {k}"
+            )));
+        }
+        camera.passes = self.passes.unwrap_or(camera.passes);
+        let max = crate::scene::MAX_PASSES;
+        if !(1..=max).contains(&camera.passes) {
+            return Err(Error::Invalid(format!(
+                "--passes must be in 1..={max}, got {}",
+                camera.passes
             )));
         }
         // The frame is drawn at k× the image and reduced by the engine when read back.

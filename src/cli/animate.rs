@@ -40,6 +40,11 @@ pub struct AnimateArgs {
     /// frame's cost), 1..=8.
     #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=antiradiance::scene::MAX_SUPERSAMPLE as i64))]
     pub supersample: Option<u32>,
+    /// Override `camera.passes`: the frame drawn N times, each pass's samples shifted along
+    /// the pixel's diagonal by 1/N of their spacing, and averaged (hard edges along the image's
+    /// rows and columns integrated in N× finer steps; N× the frame's cost), 1..=16.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=antiradiance::scene::MAX_PASSES as i64))]
+    pub passes: Option<u32>,
     /// PNG exposure in stops.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite)]
     pub exposure: f64,
@@ -84,6 +89,7 @@ fn run(scene: &Scene, a: AnimateArgs, name: &str) -> Result<()> {
         width: a.size.width,
         height: a.size.height,
         supersample: a.supersample,
+        passes: a.passes,
         backend: a.backend,
         method: a.method,
         baseline: a.baseline.settings(),

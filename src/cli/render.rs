@@ -47,6 +47,11 @@ pub struct RenderArgs {
     /// frame's cost), 1..=8.
     #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(1..=antiradiance::scene::MAX_SUPERSAMPLE as i64))]
     pub supersample: Option<u32>,
+    /// Override `camera.passes`: the frame drawn N times, each pass's samples shifted along
+    /// the pixel's diagonal by 1/N of their spacing, and averaged (hard edges along the image's
+    /// rows and columns integrated in N× finer steps; N× the frame's cost), 1..=16.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=antiradiance::scene::MAX_PASSES as i64))]
+    pub passes: Option<u32>,
     /// PNG exposure in stops (pixel values are multiplied by 2^exposure).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite)]
     pub exposure: f64,
@@ -97,6 +102,7 @@ impl RenderArgs {
         o.width = self.size.width;
         o.height = self.size.height;
         o.supersample = self.supersample;
+        o.passes = self.passes;
         o.backend = self.backend;
         o.method = self.method;
         o.baseline = self.baseline.settings();

@@ -65,18 +65,19 @@ pub(crate) fn damping_for(g: f64) -> f64 {
 
 /// Iterates `solver` per `prep.settings`, in batches of [`BATCH`] (one when a frame is wanted
 /// after every iteration). `initialized()` is called once, after the first initial state;
-/// `frame(k, solver)` is called for the frames wanted: after every iteration when
+/// `frame(k, solver, prep)` is called for the frames wanted (it may shift `prep`'s camera for
+/// the frame's passes, [`super::draw_frame`]): after every iteration when
 /// `every_iteration`, else only for the result; `k` counts the iterations of the current run
 /// (a restart begins again at 0 and says so in the fallbacks).
 pub(crate) fn drive(
-    prep: &Prepared,
+    prep: &mut Prepared,
     solver: &mut dyn Backend,
     every_iteration: bool,
     progress: &dyn Progress,
     initialized: &mut dyn FnMut(),
-    frame: &mut dyn FnMut(usize, &mut dyn Backend) -> Result<()>,
+    frame: &mut dyn FnMut(usize, &mut dyn Backend, &mut Prepared) -> Result<()>,
 ) -> Result<Outcome> {
-    let settings = &prep.settings;
+    let settings = &prep.settings.clone();
     let mut first = true;
     let mut out = Outcome::default();
     let mut scheme = settings.scheme;
@@ -104,7 +105,7 @@ pub(crate) fn drive(
         );
         let end = replay.unwrap_or(monitor.limit);
         if end == 0 {
-            frame(0, solver)?;
+            frame(0, solver, prep)?;
             break;
         }
         let mut k = 0;
@@ -140,17 +141,17 @@ pub(crate) fn drive(
             match decided {
                 None if replay.is_some() || k < end => {
                     if every_iteration && replay.is_none() {
-                        frame(k, solver)?;
+                        frame(k, solver, prep)?;
                     }
                     tail.step(solver, prep, &mut monitor, k, end)?;
                 }
                 None | Some(Verdict::Done) | Some(Verdict::Continue) => {
-                    frame(k, solver)?;
+                    frame(k, solver, prep)?;
                     break 'run;
                 }
                 Some(Verdict::Cap(why)) => {
                     out.warnings.push(why);
-                    frame(k, solver)?;
+                    frame(k, solver, prep)?;
                     break 'run;
                 }
                 Some(Verdict::Diverging(why)) if replay.is_none() && !damped_once => {
@@ -209,7 +210,7 @@ pub(crate) fn drive(
             }
         }
         // A replay ends at the iteration it re-ran to.
-        frame(k, solver)?;
+        frame(k, solver, prep)?;
         break;
     }
     out.extrapolations = tail.applied;

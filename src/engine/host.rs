@@ -40,7 +40,8 @@ impl Engine {
 
     /// The output image the last [`Engine::record_draw`] writes (valid until an update makes
     /// the backend anew: read it again after every [`Engine::record_update`]). It is the frame
-    /// before reduction: `camera.supersample` × the image's size (a host samples or blits it).
+    /// before reduction: `camera.supersample` × the image's size (a host samples or blits it),
+    /// one unshifted pass of `camera.passes` (only [`Engine::draw`] averages the passes).
     pub fn output_image(&mut self) -> Result<OutputImage> {
         let out = if self.backend.host_frame().is_some() {
             let h = self.backend.host_frame().expect("checked");

@@ -10,6 +10,7 @@
 pub mod drive;
 mod host;
 pub mod motion;
+mod passes;
 pub mod planned;
 pub mod stats;
 mod tail;
@@ -32,6 +33,8 @@ use crate::scene::{Camera, Precision, Scene};
 use crate::settings::BackendKind;
 use crate::solver::Table;
 use ash::vk;
+use passes::draw_frame;
+pub use passes::pass_jitter;
 use std::cell::Cell;
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -247,8 +250,7 @@ impl Engine {
 
     /// Draws the current state from the camera into host memory.
     pub fn draw(&mut self) -> Result<Image> {
-        let k = self.prep.camera.supersample;
-        Ok(self.backend.draw(&self.prep)?.box_reduced(k))
+        draw_frame(self.backend.as_mut(), &mut self.prep)
     }
 
     /// Draws the next frames from `camera` (a pose, target or field of view; the image size
@@ -387,40 +389,41 @@ impl Engine {
         let setup_ms = Cell::new(0.0);
         let solve_start = Cell::new(Instant::now());
         let mut excluded_ms = 0.0;
-        let prep = &self.prep;
         let mut initialized = || {
             setup_ms.set(ms(setup_start));
             solve_start.set(Instant::now());
         };
-        let mut on_frame = |k: usize, backend: &mut dyn Backend| -> Result<()> {
-            let t = Instant::now();
-            let image = backend.draw(prep)?.box_reduced(prep.camera.supersample);
-            if !image.is_finite() {
-                return Err(Error::Numerical(format!(
-                    "the frame after iteration {k} has non-finite pixels"
-                )));
-            }
-            let frame_ms = ms(t);
-            excluded_ms += frame_ms;
-            let t = Instant::now();
-            each(IterationFrame {
-                iteration: k,
-                image,
-                setup_ms: setup_ms.get(),
-                solve_ms: ms(solve_start.get()) - excluded_ms,
-                frame_ms,
-            })?;
-            excluded_ms += ms(t);
-            Ok(())
-        };
+        let mut on_frame =
+            |k: usize, backend: &mut dyn Backend, prep: &mut Prepared| -> Result<()> {
+                let t = Instant::now();
+                let image = draw_frame(backend, prep)?;
+                if !image.is_finite() {
+                    return Err(Error::Numerical(format!(
+                        "the frame after iteration {k} has non-finite pixels"
+                    )));
+                }
+                let frame_ms = ms(t);
+                excluded_ms += frame_ms;
+                let t = Instant::now();
+                each(IterationFrame {
+                    iteration: k,
+                    image,
+                    setup_ms: setup_ms.get(),
+                    solve_ms: ms(solve_start.get()) - excluded_ms,
+                    frame_ms,
+                })?;
+                excluded_ms += ms(t);
+                Ok(())
+            };
         let outcome = drive::drive(
-            prep,
+            &mut self.prep,
             self.backend.as_mut(),
             every_iteration,
             progress,
             &mut initialized,
             &mut on_frame,
         )?;
+        let prep = &self.prep;
         let mut pass_ms = BTreeMap::new();
         for (k, v) in self.backend.take_timings() {
             *pass_ms.entry(k).or_insert(0.0) += v;

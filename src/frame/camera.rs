@@ -28,6 +28,8 @@ pub struct View {
     pub width: u32,
     /// Image height in pixels.
     pub height: u32,
+    /// The camera's [`Camera::jitter`]: the image shifted by it (pixels).
+    pub jitter: [f64; 2],
 }
 
 impl View {
@@ -45,11 +47,13 @@ impl View {
             aspect: cam.width as f64 / cam.height as f64,
             width: cam.width,
             height: cam.height,
+            jitter: cam.jitter,
         }
     }
 
     /// Unit direction through image position (`x`, `y`) in pixels (continuous; 0,0 = top-left).
     pub fn ray(&self, x: f64, y: f64) -> DVec3 {
+        let (x, y) = (x + self.jitter[0], y + self.jitter[1]);
         let sx = (2.0 * x / self.width as f64 - 1.0) * self.tan_half * self.aspect;
         let sy = (1.0 - 2.0 * y / self.height as f64) * self.tan_half;
         (self.forward + self.right * sx + self.up * sy).normalize()
@@ -69,7 +73,14 @@ impl View {
         );
         let (sx, sy) = (1.0 / (self.tan_half * self.aspect), 1.0 / self.tan_half);
         let proj = reversed_perspective(sx, sy, near, far);
-        proj * view
+        // The jitter moves what framebuffer position (x, y) shows to image position (x, y) +
+        // jitter: clip x and y shift by −2·jitter/size times w.
+        let (jx, jy) = (
+            -2.0 * self.jitter[0] / self.width as f64,
+            -2.0 * self.jitter[1] / self.height as f64,
+        );
+        let shift = DMat4::from_cols(DVec4::X, DVec4::Y, DVec4::Z, DVec4::new(jx, jy, 0.0, 1.0));
+        shift * proj * view
     }
 }
 
@@ -98,9 +109,30 @@ mod tests {
             width: 64,
             height: 48,
             supersample: 1,
+            jitter: [0.0; 2],
+            passes: 1,
             fov_axis: Default::default(),
         };
+        for jitter in [[0.0; 2], [0.375, -0.125]] {
+            check(&Camera {
+                jitter,
+                ..cam.clone()
+            });
+        }
         let v = View::new(&cam);
+        // Image right is forward × up; top row looks up.
+        assert!(v.ray(64.0, 24.0).dot(v.right) > 0.0);
+        assert!(v.ray(32.0, 0.0).y > v.ray(32.0, 48.0).y);
+        // A jitter shifts the image: (x, y) of the shifted view looks where (x + jx, y + jy) did.
+        let j = View::new(&Camera {
+            jitter: [0.375, -0.125],
+            ..cam.clone()
+        });
+        assert!((j.ray(10.0, 3.0) - v.ray(10.375, 2.875)).length() < 1e-12);
+    }
+
+    fn check(cam: &Camera) {
+        let v = View::new(cam);
         let m = v.view_proj(0.01, 100.0);
         for (x, y) in [(0.0, 0.0), (10.5, 3.25), (64.0, 48.0), (32.0, 24.0)] {
             let p = v.eye + v.ray(x, y) * 3.0;
@@ -115,8 +147,5 @@ mod tests {
             let nearer = m * (v.eye + v.ray(x, y) * 2.0).extend(1.0);
             assert!(nearer.z / nearer.w > ndc.z, "reversed depth");
         }
-        // Image right is forward × up; top row looks up.
-        assert!(v.ray(64.0, 24.0).dot(v.right) > 0.0);
-        assert!(v.ray(32.0, 0.0).y > v.ray(32.0, 48.0).y);
     }
 }

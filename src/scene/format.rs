@@ -279,6 +279,8 @@ pub struct CameraDesc {
     pub height: Option<i64>,
     /// Frame pixels per image pixel along each axis, box-filtered, 1..=8 (default 1).
     pub supersample: Option<i64>,
+    /// Shifted passes of the frame, averaged ([`super::Camera::passes`]).
+    pub passes: Option<i64>,
 }
 
 /// `[solver]`; [`super::SolverSettings`] has the defaults and the ranges.

@@ -200,6 +200,8 @@ pub(super) fn framing(scene: &Scene) -> Camera {
         width: 512,
         height: 512,
         supersample: 1,
+        jitter: [0.0; 2],
+        passes: 1,
         fov_axis: Default::default(),
     }
 }
@@ -313,6 +315,20 @@ fn camera(c: &format::CameraDesc, path: &Path) -> Result<Camera> {
                     format!(
                         "`camera.supersample` must be in 1..={}, got {k}",
                         super::MAX_SUPERSAMPLE
+                    ),
+                ))
+            }
+        },
+        jitter: [0.0; 2],
+        passes: match c.passes {
+            None => 1,
+            Some(k) if (1..=super::MAX_PASSES as i64).contains(&k) => k as u32,
+            Some(k) => {
+                return Err(scene_err(
+                    path,
+                    format!(
+                        "`camera.passes` must be in 1..={}, got {k}",
+                        super::MAX_PASSES
                     ),
                 ))
             }

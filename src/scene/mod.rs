@@ -179,6 +179,13 @@ pub struct Camera {
     /// each): 1..=[`MAX_SUPERSAMPLE`], default 1. The frame is drawn at `supersample` × the
     /// size and reduced when read back; the solve does not depend on it.
     pub supersample: u32,
+    /// Where the frame's samples lie, shifted from their regular grid, in frame pixels (x
+    /// right, y down): 0 but while the engine draws one of [`Camera::passes`]'s shifted frames.
+    pub jitter: [f64; 2],
+    /// The frame drawn this many times, each pass's samples shifted along the pixel's diagonal
+    /// by `1/passes` of their spacing, and averaged (`2·supersample·passes` distinct sample rows
+    /// and columns per pixel, the cost of `passes` frames): 1..=[`MAX_PASSES`], default 1.
+    pub passes: u32,
     /// The axis whose field of view the scene file fixed: when `width` or `height` is
     /// overridden, [`Camera::resized`] keeps the angle along it (a Mitsuba sensor's `fov_axis`,
     /// `x` by default; TOML and glTF state the vertical angle).
@@ -233,6 +240,9 @@ impl Camera {
         }
     }
 }
+
+/// Largest [`Camera::passes`].
+pub const MAX_PASSES: u32 = 16;
 
 /// Largest [`Camera::supersample`].
 pub const MAX_SUPERSAMPLE: u32 = 8;
@@ -448,6 +458,8 @@ impl Scene {
                 width: 512,
                 height: 512,
                 supersample: 1,
+                jitter: [0.0; 2],
+                passes: 1,
                 fov_axis: Default::default(),
             },
             solver: SolverSettings::default(),

@@ -150,6 +150,8 @@ mod tests {
             width: 64,
             height: 64,
             supersample: 1,
+            jitter: [0.0; 2],
+            passes: 1,
             fov_axis: Default::default(),
         }
     }

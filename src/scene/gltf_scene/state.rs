@@ -358,6 +358,8 @@ impl State<'_> {
             width,
             height,
             supersample: 1,
+            jitter: [0.0; 2],
+            passes: 1,
             fov_axis: Default::default(),
         });
     }

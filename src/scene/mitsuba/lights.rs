@@ -190,6 +190,8 @@ impl<'a, 'i> Reader<'a, 'i> {
             width: width as u32,
             height: height as u32,
             supersample: 1,
+            jitter: [0.0; 2],
+            passes: 1,
             fov_axis,
         }))
     }
