@@ -71,9 +71,20 @@ fn non_finite_and_out_of_range_flags_are_refused_naming_the_flag() {
     refused(&["render", s, "--width", "0"], 1, &["--width"]);
     refused(&["render", s, "--bins", "7"], 1, &["--bins"]);
     refused(&["render", s, "--passes", "0"], 2, &["--passes"]);
-    refused(&["animate", s, "--out", "o", "--passes", "17"], 2, &["--passes"]);
     refused(
-        &["render", s, "--method", "image-based-radiosity", "--near-rays", "5000"],
+        &["animate", s, "--out", "o", "--passes", "17"],
+        2,
+        &["--passes"],
+    );
+    refused(
+        &[
+            "render",
+            s,
+            "--method",
+            "image-based-radiosity",
+            "--near-rays",
+            "5000",
+        ],
         1,
         &["--near-rays"],
     );
