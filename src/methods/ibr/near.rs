@@ -8,7 +8,8 @@
 //! cosine-distributed rays; where one meets a surface's front at distance `r`, it adds
 //! `kd·E·a/(r² + a)/rays` of irradiance, `E` the total irradiance the cube holds there (the
 //! direct light, the VPLs' and the near field restored so far). [`SWEEPS`] Jacobi sweeps give the
-//! near field's own interreflection in a corner. Both backends warp on the host, so both run
+//! near field's own interreflection in a corner; each sweep casts its rays anew (keeping their
+//! hits would take 30 times the cube's memory). Both backends warp on the host, so both run
 //! this same code on the same cube.
 
 use super::cube::Cube;
@@ -24,9 +25,10 @@ use rayon::prelude::*;
 use std::f64::consts::PI;
 use std::time::Instant;
 
-/// Jacobi sweeps of the restored near field (each one more reflection within it; at ρ = 0.5
-/// the third adds an eighth of the first's light in a corner, the fourth a sixteenth).
-pub const SWEEPS: usize = 4;
+/// Jacobi sweeps of the restored near field, each one more reflection within it (the closed
+/// uniform box at ρ = 0.5: mean −1.420 / −1.305 / −1.288 / −1.286% after 1 / 2 / 3 / 4, worst
+/// pixel 10.0 / 9.56 / 9.52 / 9.51%).
+pub const SWEEPS: usize = 3;
 
 /// Rays stop where the clamp takes less than this fraction of a point light's light
 /// (`a/(r² + a)`): farther surfaces miss less than it, the ray would cost without adding.
@@ -91,42 +93,17 @@ pub fn restore(cube: &mut Cube, nf: &NearField<'_>, clamp_area: f64, rays: u32) 
         .map(|&(p, n)| direct_irradiance(nf.lights, nf.maps, p, n))
         .collect();
     cube.set_layers(&direct, |l, e| l.direct = e);
-    // Per layer, the surfaces its rays meet within reach: (point, face normal toward the
-    // layer, kd · a/(r² + a) / rays).
-    let hits: Vec<Vec<(DVec3, DVec3, DVec3)>> = frames
-        .par_iter()
-        .map(|&(p, n)| {
-            let (t1, t2) = basis(n);
-            let o = p + n * nf.lift;
-            dirs.iter()
-                .filter_map(|d| {
-                    let d = t1 * d.x + t2 * d.y + n * d.z;
-                    let hit = nf.caster.closest(o, d, 0.0, reach)?;
-                    let slot = hit.shape as usize;
-                    let ny = nf.surf.normal[slot];
-                    if d.dot(ny) >= 0.0 {
-                        return None;
-                    }
-                    let leaf = nf.surf.leaf[slot] as usize;
-                    let kd = nf.sys.materials[nf.sys.leaves[leaf].material as usize].kd;
-                    let w = a / (hit.t * hit.t + a) / rays as f64;
-                    Some((o + d * hit.t, ny, kd * w))
-                })
-                .collect()
-        })
-        .collect();
-    let count: u64 = hits.iter().map(|h| h.len() as u64).sum();
+    // Each sweep casts the rays again rather than keeping their hits: at 16 rays a layer those
+    // would take about 70 bytes a ray (110 MB for the Cornell box's 114K layers), 30 times the
+    // cube.
+    let mut count = 0;
     for _ in 0..SWEEPS {
-        let near: Vec<DVec3> = hits
+        let gathered: Vec<(DVec3, u64)> = frames
             .par_iter()
-            .map(|h| {
-                h.iter()
-                    .map(|&(y, ny, kw)| {
-                        kw * cube.lookup(y, ny, |l| l.direct + l.irradiance + l.near)
-                    })
-                    .sum()
-            })
+            .map(|&(p, n)| gather(cube, nf, p, n, &dirs, a, reach))
             .collect();
+        count = gathered.iter().map(|g| g.1).sum();
+        let near: Vec<DVec3> = gathered.iter().map(|g| g.0).collect();
         cube.set_layers(&near, |l, e| l.near = e);
     }
     let (vpl, near) = cube.layers_iter().fold((0.0, 0.0), |(v, n), l| {
@@ -138,6 +115,39 @@ pub fn restore(cube: &mut Cube, nf: &NearField<'_>, clamp_area: f64, rays: u32) 
         share: near / vpl.max(1e-300),
         ms: t.elapsed().as_secs_f64() * 1e3,
     }
+}
+
+/// The near field a layer at `p` (unit normal `n`) misses, from the light the cube holds where
+/// its rays `dirs` (around +z) meet a surface's front within `reach`; and how many did.
+fn gather(
+    cube: &Cube,
+    nf: &NearField<'_>,
+    p: DVec3,
+    n: DVec3,
+    dirs: &[DVec3],
+    a: f64,
+    reach: f64,
+) -> (DVec3, u64) {
+    let (t1, t2) = basis(n);
+    let o = p + n * nf.lift;
+    let (mut sum, mut hits) = (DVec3::ZERO, 0);
+    for d in dirs {
+        let d = t1 * d.x + t2 * d.y + n * d.z;
+        let Some(hit) = nf.caster.closest(o, d, 0.0, reach) else {
+            continue;
+        };
+        let slot = hit.shape as usize;
+        let ny = nf.surf.normal[slot];
+        if d.dot(ny) >= 0.0 {
+            continue;
+        }
+        let leaf = nf.surf.leaf[slot] as usize;
+        let kd = nf.sys.materials[nf.sys.leaves[leaf].material as usize].kd;
+        let e = cube.lookup(o + d * hit.t, ny, |l| l.direct + l.irradiance + l.near);
+        sum += kd * e * (a / (hit.t * hit.t + a));
+        hits += 1;
+    }
+    (sum / dirs.len() as f64, hits)
 }
 
 #[cfg(test)]
