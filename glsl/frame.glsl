@@ -275,6 +275,27 @@ float ar_visibility(Light l, vec3 p, vec3 n, float cosv) {
     return total > 0.0 ? lit / total : 1.0;
 }
 
+// lights.rs straddling: an emitter cell within CELL_FAR of p, p in front of it, whose sample point
+// lies behind p's plane (normal n) while some corner lies in front: its light arrives from the
+// front corners' mean, unshadowed, and ar_irradiance_on takes the cell's part in front.
+bool ar_straddles(Light l, vec3 p, vec3 n, out vec3 travel) {
+    travel = vec3(0.0);
+    vec3 d = p - l.position.xyz;
+    if (l.kind_views.x != 3u || l.kind_views.w != 1u || dot(d, d) > 1e3 * l.params.x
+        || dot(p - l.cell[0].xyz, l.direction.xyz) <= 0.0) {
+        return false;
+    }
+    vec3 sum = vec3(0.0);
+    float k = 0.0;
+    for (int j = 0; j < 3; j++) {
+        bool front = dot(l.cell[j].xyz - p, n) > 0.0;
+        sum += front ? l.cell[j].xyz : vec3(0.0);
+        k += front ? 1.0 : 0.0;
+    }
+    travel = normalize(p - sum / max(k, 1.0));
+    return k > 0.0;
+}
+
 // lights.rs direct_radiance_from: n the face normal (front side, shadow lookup), ns the shading
 // normal (receiver cosine, BRDF); the lights `begin..end` less `skip..skip_end` (ranges, not a
 // filter: on lavapipe a loop over lights that are skipped costs nearly as much as one that
@@ -294,12 +315,14 @@ vec3 ar_direct_radiance(vec3 p, vec3 n, vec3 ns, Material m, vec3 wo, uint begin
         if (!ar_incident(lights[i], p, travel, e)) {
             continue;
         }
+        // lights.rs reach: a cell behind the receiver's plane may still straddle it.
         float cos_face = -dot(travel, n);
+        bool straddles = cos_face <= 0.0 && ar_straddles(lights[i], p, n, travel);
         float cosv = -dot(travel, ns);
-        if (cos_face <= 0.0 || cosv <= 0.0) {
+        if ((cos_face <= 0.0 && !straddles) || cosv <= 0.0) {
             continue;
         }
-        float v = ar_visibility(lights[i], p, n, cos_face);
+        float v = straddles ? 1.0 : ar_visibility(lights[i], p, n, cos_face);
         if (v > 0.0) {
             l += ar_brdf(m, ns, travel, wo) * ar_irradiance_on(lights[i], e, cosv, p, ns) * v;
         }

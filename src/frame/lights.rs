@@ -162,14 +162,61 @@ fn reaching<'a>(
         .take(range.end)
         .skip(range.start)
         .filter_map(move |(i, light)| {
-            let inc = incident(light, p)?;
-            let cos_face = -inc.travel.dot(n);
-            if cos_face <= 0.0 {
-                return None;
-            }
-            let v = maps.visibility(i, p, n, cos_face);
-            (v > 0.0).then_some((light, inc, v))
+            let (inc, v) = reach(light, i, maps, p, n)?;
+            Some((light, inc, v))
         })
+}
+
+/// How light `i` reaches the front of a surface at `p` of face normal `n`: its incident light
+/// and shadow-map visibility (> 0), or, where it is an emitter cell ([`irradiance_on`]) whose
+/// sample point lies behind the surface's plane while part of the cell lies in front, the light
+/// of that part unshadowed ([`straddling`]). `glsl/frame.glsl` ar_direct_radiance mirrors it.
+fn reach(
+    light: &Light,
+    i: usize,
+    maps: &ShadowMaps,
+    p: DVec3,
+    n: DVec3,
+) -> Option<(Incident, f64)> {
+    let inc = incident(light, p)?;
+    let cos_face = -inc.travel.dot(n);
+    if cos_face <= 0.0 {
+        return straddling(light, p, n).map(|inc| (inc, 1.0));
+    }
+    let v = maps.visibility(i, p, n, cos_face);
+    (v > 0.0).then_some((inc, v))
+}
+
+/// An emitter cell within [`CELL_FAR`] of `p`, `p` in front of it, whose sample point lies behind
+/// `p`'s plane (normal `n`) but some corner in front: the light arrives from the front corners'
+/// mean, and [`irradiance_on`] takes the cell's part in front. Dropping it (the point's cosine
+/// says nothing reaches) lost the light of every cell a receiver's plane cuts: in a closed
+/// uniform box a block's faces got 10% too little direct light. The sample's shadow map cannot
+/// say whether that part is hidden (its rays leave from behind the receiver's plane, through
+/// it); the part lies beside the plane, so it is taken as unoccluded.
+fn straddling(light: &Light, p: DVec3, n: DVec3) -> Option<Incident> {
+    let Light::EmitterSample {
+        position,
+        normal,
+        area,
+        cell: Some(c),
+        ..
+    } = *light
+    else {
+        return None;
+    };
+    if p.distance_squared(position) > CELL_FAR * area || (p - c[0]).dot(normal) <= 0.0 {
+        return None;
+    }
+    let front: Vec<DVec3> = c.into_iter().filter(|&x| (x - p).dot(n) > 0.0).collect();
+    if front.is_empty() {
+        return None;
+    }
+    let mid = front.iter().sum::<DVec3>() / front.len() as f64;
+    Some(Incident {
+        travel: (p - mid).normalize(),
+        irradiance: DVec3::ZERO,
+    })
 }
 
 /// [`direct_radiance`] from the lights `range` of `lights`.
@@ -300,17 +347,9 @@ pub fn direct_in_table(sys: &System, lights: &[Light], maps: &ShadowMaps) -> Tab
             let mut out = Vec::new();
             if !e.is_cluster() {
                 for (i, light) in lights.iter().enumerate() {
-                    let Some(inc) = incident(light, e.center) else {
+                    let Some((inc, v)) = reach(light, i, maps, e.center, leaf.normal) else {
                         continue;
                     };
-                    let cos = -inc.travel.dot(leaf.normal);
-                    if cos <= 0.0 {
-                        continue;
-                    }
-                    let v = maps.visibility(i, e.center, leaf.normal, cos);
-                    if v <= 0.0 {
-                        continue;
-                    }
                     let b = front_bin(&sys.bins, inc.travel, leaf.normal, -1.0);
                     let cb = -sys.bins.centers[b].dot(leaf.normal);
                     out.push((
@@ -332,17 +371,9 @@ pub fn direct_in_table(sys: &System, lights: &[Light], maps: &ShadowMaps) -> Tab
                 let mut sum = DVec3::ZERO;
                 let mut travel = None;
                 for &(p, n, share) in &points {
-                    let Some(inc) = incident(light, p) else {
+                    let Some((inc, v)) = reach(light, i, maps, p, n) else {
                         continue;
                     };
-                    let cos = -inc.travel.dot(n);
-                    if cos <= 0.0 {
-                        continue;
-                    }
-                    let v = maps.visibility(i, p, n, cos);
-                    if v <= 0.0 {
-                        continue;
-                    }
                     travel.get_or_insert(inc.travel);
                     sum += irradiance_on(light, &inc, p, n) * (v * share);
                 }
