@@ -419,6 +419,41 @@ mod tests {
         assert!((inc.travel - DVec3::NEG_Y).length() < 1e-12);
     }
 
+    /// A cell the receiver's plane cuts, its sample point behind that plane: the part in front
+    /// lights the receiver (unshadowed), as the clipped edge sum; nothing where no corner is in
+    /// front.
+    #[test]
+    fn a_cell_cut_by_the_receivers_plane_lights_its_front_part() {
+        let scene = crate::scene::test_plane(0.3);
+        let c = [
+            DVec3::new(-1.0, 1.0, -1.0),
+            DVec3::new(1.0, 1.0, -1.0),
+            DVec3::new(0.0, 1.0, 1.0),
+        ];
+        let cell = |c: [DVec3; 3]| Light::EmitterSample {
+            position: (c[0] + c[1] + c[2]) / 3.0,
+            normal: DVec3::NEG_Y,
+            radiance: DVec3::splat(2.0),
+            area: 2.0,
+            cell: Some(c),
+        };
+        let lights = vec![cell(c)];
+        let maps = ShadowMaps::new(&scene, &lights, 16, 8).unwrap();
+        let (p, n) = (DVec3::new(0.0, 0.5, 0.0), DVec3::Z);
+        assert!(
+            incident(&lights[0], p).unwrap().travel.dot(n) > 0.0,
+            "the point is behind"
+        );
+        let e = direct_irradiance(&lights, &maps, p, n);
+        let want = 2.0 * projected_solid_angle(&c, p, n);
+        assert!(
+            want > 0.01 && (e.x - want).abs() < 1e-12,
+            "{e} against {want}"
+        );
+        let behind = c.map(|x| x - DVec3::Z * 1.5);
+        assert_eq!(direct_irradiance(&[cell(behind)], &maps, p, n), DVec3::ZERO);
+    }
+
     #[test]
     fn front_bin_lies_on_the_requested_side() {
         let bins = Bins::new(32).unwrap();
