@@ -72,6 +72,11 @@ fn non_finite_and_out_of_range_flags_are_refused_naming_the_flag() {
     refused(&["render", s, "--bins", "7"], 1, &["--bins"]);
     refused(&["render", s, "--passes", "0"], 2, &["--passes"]);
     refused(
+        &["render", s, "--emitter-map-size", "8"],
+        1,
+        &["--emitter-map-size"],
+    );
+    refused(
         &["animate", s, "--out", "o", "--passes", "17"],
         2,
         &["--passes"],

@@ -98,6 +98,10 @@ pub struct Options {
     pub passes: Option<u32>,
     /// Side of each shadow map (texels).
     pub shadow_map_size: u32,
+    /// Side of each emitter sample's cube-face maps (texels; default
+    /// [`crate::frame::emitters::SAMPLE_MAP_SIZE`]): finer maps narrow the band a shadow's
+    /// filter reaches across a contact (docs/measurements.md, the lamp's direct light).
+    pub emitter_map_size: u32,
     /// Device to render on (GPU backend; a host's device when embedding); `None` creates a
     /// headless context.
     pub context: Option<Arc<Context>>,
@@ -136,6 +140,7 @@ impl Default for Options {
             supersample: None,
             passes: None,
             shadow_map_size: 1024,
+            emitter_map_size: crate::frame::emitters::SAMPLE_MAP_SIZE,
             context: None,
             device: None,
             validation: false,
@@ -253,6 +258,12 @@ impl Options {
             return bad(format!(
                 "--shadow-map-size must be 16..=8192, got {}",
                 self.shadow_map_size
+            ));
+        }
+        if !(16..=2048).contains(&self.emitter_map_size) {
+            return bad(format!(
+                "--emitter-map-size must be 16..=2048, got {}",
+                self.emitter_map_size
             ));
         }
         if let Some(b) = self.solver.bins {

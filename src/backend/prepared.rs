@@ -225,8 +225,7 @@ impl Prepared {
                 settings.max_iterations
             ));
         }
-        let (maps, fallbacks) =
-            fit_shadow_maps(scene, &lights, options.shadow_map_size, usize::MAX)?;
+        let (maps, fallbacks) = fit_shadow_maps(scene, &lights, map_sizes(options), usize::MAX)?;
         Ok(Self {
             scene: scene.clone(),
             lights,
@@ -244,12 +243,8 @@ impl Prepared {
 
     /// Re-plans and re-fits the shadow maps after a method added lights (instant radiosity's
     /// VPLs, from `lights[first_vpl..]`); earlier decisions are kept after the new plan's.
-    pub fn relight(
-        &mut self,
-        shadow_map_size: u32,
-        first_vpl: usize,
-        all_passes: bool,
-    ) -> Result<()> {
+    pub fn relight(&mut self, options: &Options, first_vpl: usize) -> Result<()> {
+        let all_passes = options.all_passes;
         let old = std::mem::take(&mut self.plan.decisions);
         self.plan = Plan::new(
             &self.scene,
@@ -265,7 +260,7 @@ impl Prepared {
             }
         }
         let (maps, fallbacks) =
-            fit_shadow_maps(&self.scene, &self.lights, shadow_map_size, first_vpl)?;
+            fit_shadow_maps(&self.scene, &self.lights, map_sizes(options), first_vpl)?;
         self.maps = maps;
         self.fallbacks.extend(fallbacks);
         Ok(())
@@ -404,19 +399,24 @@ pub fn fit_system(
     }
 }
 
+/// The sides `options` asks of the analytic lights' maps and of the emitter samples'.
+fn map_sizes(options: &Options) -> (u32, u32) {
+    (options.shadow_map_size, options.emitter_map_size)
+}
+
 /// Every light's shadow-map views in one atlas of at most [`MAX_ATLAS`]² texels: analytic
-/// lights' maps at `size`², emitter samples' at [`emitters::SAMPLE_MAP_SIZE`]², VPLs (lights from
-/// `first_vpl` on) at [`super::method::VPL_MAP_SIZE`]²; all halved together until they
-/// fit, each halving a fallback sentence.
+/// lights' maps at `sizes.0`², emitter samples' at `sizes.1`² (`--emitter-map-size`, default
+/// [`emitters::SAMPLE_MAP_SIZE`]), VPLs (lights from `first_vpl` on) at
+/// [`super::method::VPL_MAP_SIZE`]²; all halved together until they fit, each halving a
+/// fallback sentence.
 pub fn fit_shadow_maps(
     scene: &Scene,
     lights: &[Light],
-    size: u32,
+    sizes: (u32, u32),
     first_vpl: usize,
 ) -> Result<(ShadowMaps, Vec<String>)> {
     let mut fallbacks = Vec::new();
-    let (mut size, mut sample, mut vpl) =
-        (size, emitters::SAMPLE_MAP_SIZE, super::method::VPL_MAP_SIZE);
+    let (mut size, mut sample, mut vpl) = (sizes.0, sizes.1, super::method::VPL_MAP_SIZE);
     loop {
         let sides: Vec<u32> = lights
             .iter()

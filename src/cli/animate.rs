@@ -64,6 +64,10 @@ pub struct AnimateArgs {
     /// Shadow map side in texels.
     #[arg(long, default_value_t = 1024)]
     pub shadow_map_size: u32,
+    /// Side in texels of each area-emitter sample's cube-face maps (finer: sharper contact
+    /// shadows under area lights; five faces of 4-byte texels per sample).
+    #[arg(long, default_value_t = antiradiance::frame::emitters::SAMPLE_MAP_SIZE)]
+    pub emitter_map_size: u32,
     /// Vulkan device whose name contains this (default: prefer a discrete GPU).
     #[arg(long)]
     pub device: Option<String>,
@@ -94,6 +98,7 @@ fn run(scene: &Scene, a: AnimateArgs, name: &str) -> Result<()> {
         method: a.method,
         baseline: a.baseline.settings(),
         shadow_map_size: a.shadow_map_size,
+        emitter_map_size: a.emitter_map_size,
         device: a.device,
         ..Options::default()
     };

@@ -67,6 +67,10 @@ pub struct RenderArgs {
     /// Shadow map side in texels.
     #[arg(long, default_value_t = 1024)]
     pub shadow_map_size: u32,
+    /// Side in texels of each area-emitter sample's cube-face maps (finer: sharper contact
+    /// shadows under area lights; five faces of 4-byte texels per sample).
+    #[arg(long, default_value_t = antiradiance::frame::emitters::SAMPLE_MAP_SIZE)]
+    pub emitter_map_size: u32,
     /// Vulkan device whose name contains this (default: prefer a discrete GPU).
     #[arg(long)]
     pub device: Option<String>,
@@ -107,6 +111,7 @@ impl RenderArgs {
         o.method = self.method;
         o.baseline = self.baseline.settings();
         o.shadow_map_size = self.shadow_map_size;
+        o.emitter_map_size = self.emitter_map_size;
         o.device = self.device;
         let bars = Bars::default();
         let r = Engine::new(&s, &o, &bars)

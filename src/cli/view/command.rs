@@ -33,6 +33,10 @@ pub struct ViewArgs {
     /// Shadow map side in texels.
     #[arg(long, default_value_t = 1024)]
     pub shadow_map_size: u32,
+    /// Side in texels of each area-emitter sample's cube-face maps (finer: sharper contact
+    /// shadows under area lights; five faces of 4-byte texels per sample).
+    #[arg(long, default_value_t = antiradiance::frame::emitters::SAMPLE_MAP_SIZE)]
+    pub emitter_map_size: u32,
     /// Exposure in stops at the start (the keys `-` and `=` change it by half a stop).
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = finite)]
     pub exposure: f64,
@@ -77,6 +81,7 @@ impl ViewArgs {
         o.width = self.size.width;
         o.height = self.size.height;
         o.shadow_map_size = self.shadow_map_size;
+        o.emitter_map_size = self.emitter_map_size;
         o.device = self.device;
         let name = scene_name(&s);
         super::run(super::ViewRequest {

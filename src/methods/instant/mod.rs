@@ -75,7 +75,7 @@ pub fn prepare(prep: &mut Prepared, options: &Options) -> Result<MethodReport> {
     let count = vpls.lights.len();
     prep.lights.extend(vpls.lights);
     let t = Instant::now();
-    prep.relight(options.shadow_map_size, first, options.all_passes)?;
+    prep.relight(options, first)?;
     prep.plan.decisions.push(format!(
         "instant radiosity: {} light paths left {count} VPLs ({:.0} ms), each a cosine point light with a {}² shadow map per face, clamped as a disc of {:.3e} m²; no links, nothing through the bins",
         vpls.paths,
