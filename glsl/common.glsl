@@ -87,6 +87,7 @@ const float AR_PI = 3.14159265358979;
 #define AR_FRAME_SPLAT 11
 #define AR_FRAME_EMITTERS 12
 #define AR_FRAME_GBUF_NORMAL 13
+#define AR_FRAME_SPLAT_BINS 14
 
 layout(push_constant) uniform FrameConstants {
     mat4 view_proj;   // camera, or the shadow view being drawn

@@ -88,6 +88,40 @@ vec3 edge_emission(ivec2 px, int ss) {
     return sum / float(e * e);
 }
 
+// The flat surface of pixel `q`'s first sample where it is splatted, else ~0 (frame/splat.rs).
+uint ar_first_surface(ivec2 q, int ss) {
+    vec4 g = texelFetch(gbuf_position, q * ss, 0);
+    if (ar_gbuf_background(g.w)) {
+        return 0xFFFFFFFFu;
+    }
+    FrameElement e = elements[ar_gbuf_leaf(g.w)];
+    return e.ids.z == AR_MODE_VERTEX ? 0xFFFFFFFFu : e.ids.y;
+}
+
+// A sample whose first samples around have no weight on its surface: the sum of the first
+// neighbouring pixel whose first sample is on it, in splat.rs NEIGHBOURS order (none: a zero
+// weight).
+vec4 ar_splat_neighbour(ivec2 px, int ss, uint surface) {
+    ivec2 size = ivec2(pc.sizes.xy);
+    for (int k = 0; k < 8; k++) {
+        int dx = (k == 0 || k == 4 || k == 6) ? 1 : ((k == 2 || k == 5 || k == 7) ? -1 : 0);
+        int dy = (k == 1 || k == 4 || k == 5) ? 1 : ((k == 3 || k == 6 || k == 7) ? -1 : 0);
+        ivec2 q = px + ivec2(dx, dy);
+        if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, size))) {
+            continue;
+        }
+        if (ar_first_surface(q, ss) == surface) {
+            return texelFetch(splat_sum, q, 0);
+        }
+    }
+    return vec4(0.0);
+}
+
+// The normalized sum of a splat texel (0 where no kernel reached it).
+vec3 ar_splat_value(vec4 s) {
+    return s.a > 0.0 ? s.rgb / s.a : vec3(0.0);
+}
+
 // The samples of a pixel share one evaluation of the area emitters' direct light, at their mean
 // position, where they all face the eye on one flat surface of one material (on one face slot
 // where shading normals interpolate): that light is smooth there (a penumbra over 32 emitter
@@ -139,6 +173,18 @@ void main() {
     uint a = pc.misc.y;
     uint b = pc.misc.z;
     bool shared_direct = a < b && ar_shares_direct(px, ss, mid, normal_sum, slot0);
+    // Splat sums per pixel (at its first sample) or per sample (splat.rs, frame/splat.rs).
+    bool splat_per_sample = textureSize(splat_sum, 0).x == textureSize(gbuf_position, 0).x;
+    // The first samples of this pixel and of the three after it (x + 1, y + 1, both): each
+    // sample interpolates bilinearly between those on its surface (frame/splat.rs).
+    uint first_surface[4];
+    vec3 first_value[4];
+    for (int k = 0; k < 4; k++) {
+        ivec2 q = px + ivec2(k % 2, k / 2);
+        bool inside = AR_SPLAT && !splat_per_sample && all(lessThan(q, ivec2(pc.sizes.xy)));
+        first_surface[k] = inside ? ar_first_surface(q, ss) : 0xFFFFFFFFu;
+        first_value[k] = inside ? ar_splat_value(texelFetch(splat_sum, q, 0)) : vec3(0.0);
+    }
     vec3 direct = vec3(0.0);
     if (shared_direct) {
         FrameElement e = elements[slot0];
@@ -181,7 +227,34 @@ void main() {
                     l += texelFetch(gbuf_vertex, t, 0).rgb;
                 }
             } else if (AR_SPLAT) {
-                vec4 s = texelFetch(splat_sum, t, 0);
+                vec4 s;
+                if (splat_per_sample) {
+                    s = texelFetch(splat_sum, t, 0);
+                } else {
+                    vec2 f = vec2(sx, sy) / float(ss);
+                    s = vec4(0.0);
+                    for (int k = 0; k < 4; k++) {
+                        vec2 c = vec2(k % 2, k / 2);
+                        float w = (c.x > 0.5 ? f.x : 1.0 - f.x) * (c.y > 0.5 ? f.y : 1.0 - f.y);
+                        if (w > 0.0 && first_surface[k] == e.ids.y) {
+                            s += vec4(first_value[k] * w, w);
+                        }
+                    }
+                    if (s.a <= 0.0) {
+                        s = ar_splat_neighbour(px, ss, e.ids.y);
+                    }
+                    if (s.a <= 0.0) {
+                        // No pixel around has its first sample on this surface: the sample's
+                        // own leaf, in its bin (what a sum of that one splat would give).
+                        float bin = ar_sample_bin(g.xyz, ar_gbuf_leaf(g.w), t);
+                        vec3 own = vec3(0.0);
+                        if (bin >= 0.0) {
+                            float ac = e.normal_area.w * e.cos_norm.x;
+                            own = ar_display_radiance_in(e.normal_area.xyz, ac, e.ids.x, uint(bin + 0.5));
+                        }
+                        s = vec4(own, 1.0);
+                    }
+                }
                 if (s.a > 0.0) {
                     l += s.rgb / s.a;
                 }

@@ -20,6 +20,7 @@ layout(binding = AR_FRAME_GBUF_POSITION) uniform sampler2D gbuf_position;
 layout(binding = AR_FRAME_GBUF_VERTEX) uniform sampler2D gbuf_vertex;
 layout(binding = AR_FRAME_GBUF_NORMAL) uniform sampler2D gbuf_normal;
 layout(binding = AR_FRAME_SPLAT) uniform sampler2D splat_sum;
+layout(binding = AR_FRAME_SPLAT_BINS) uniform sampler2D splat_bins;
 layout(std430, binding = AR_FRAME_EMITTERS) readonly buffer Emitters { EmitterTriangle emitter_tris[]; };
 
 const float AR_SHADOW_DEPTH_BIAS = 0.1;
@@ -328,6 +329,23 @@ vec3 ar_direct_radiance(vec3 p, vec3 n, vec3 ns, Material m, vec3 wo, uint begin
         }
     }
     return l;
+}
+
+// surfaces.rs display_bin with shading.rs eye_direction: the bin toward the eye of a splatted
+// sample at `world` on slot `leaf`, G-buffer texel `t` (its shading normal there where the mesh
+// has `vn`); −1 where none (vertex-interpolated, facing away).
+float ar_sample_bin(vec3 world, uint leaf, ivec2 t) {
+    FrameElement e = elements[leaf];
+    vec3 n = e.face_normal.xyz;
+    vec3 wo = normalize(pc.eye.xyz - world);
+    if (e.ids.z == AR_MODE_VERTEX || dot(wo, n) <= 0.0) {
+        return -1.0;
+    }
+    vec3 dir = wo;
+    if (e.cos_norm.y > 0.5) {
+        dir = ar_eye_direction(wo, ar_shading_normal(texelFetch(gbuf_normal, t, 0).xyz, n, wo), n);
+    }
+    return dot(dir, n) > 0.0 ? float(ar_front_bin(dir, n, 1.0)) : -1.0;
 }
 
 #endif

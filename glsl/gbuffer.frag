@@ -8,7 +8,7 @@ layout(location = 2) in vec3 vertex_radiance;
 layout(location = 3) in vec3 normal;
 layout(location = 4) flat in uint emits;
 layout(location = 0) out vec4 out_position;  // xyz, ±(leaf slot + 1) (frame.glsl ar_gbuf_leaf)
-layout(location = 1) out vec4 out_vertex;  // rgb vertex radiance, w the display bin (splat)
+layout(location = 1) out vec4 out_vertex;  // rgb vertex radiance
 layout(location = 2) out vec4 out_normal;  // interpolated shading normal (not normalized)
 
 void main() {
@@ -23,23 +23,6 @@ void main() {
     float z = gl_FragCoord.z;
     gl_FragDepth = front ? z : max(z - (4.0e-7 * z + 4.0e-4 * fwidth(z)), 0.0);
     out_position = vec4(world, emits != 0u ? -float(leaf + 1u) : float(leaf + 1u));
-    // A splatted sample's bin toward the eye, found once here instead of by each of the ~4
-    // splats that cover it: the splatted leaves lie in its plane (surfaces.rs display_bin).
-    float bin = -1.0;
-    if (AR_SPLAT) {
-        FrameElement e = elements[leaf];
-        vec3 n = e.face_normal.xyz;
-        vec3 wo = normalize(pc.eye.xyz - world);
-        if (e.ids.z != AR_MODE_VERTEX && dot(wo, n) > 0.0) {
-            vec3 dir = wo;
-            if (e.cos_norm.y > 0.5) {
-                dir = ar_eye_direction(wo, ar_shading_normal(normal, n, wo), n);
-            }
-            if (dot(dir, n) > 0.0) {
-                bin = float(ar_front_bin(dir, n, 1.0));
-            }
-        }
-    }
-    out_vertex = vec4(vertex_radiance, bin);
+    out_vertex = vec4(vertex_radiance, 0.0);
     out_normal = vec4(normal, 0.0);
 }

@@ -97,7 +97,12 @@ impl Prepared {
         let work = Work::of(sys, &resources);
         let mut memory_bytes = resources.memory().by_name();
         memory_bytes.remove("total");
-        let frame = GpuFrame::planned_memory(&self.camera, &plan.features, &self.maps);
+        let frame = GpuFrame::planned_memory(
+            &self.camera,
+            &plan.features,
+            &self.maps,
+            self.surfaces.splat_per_sample,
+        );
         memory_bytes.insert("frame_images".into(), frame.get(Purpose::FrameImages));
         memory_bytes.insert("shadow_maps".into(), frame.get(Purpose::ShadowMaps));
         let link_chunks =

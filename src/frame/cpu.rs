@@ -9,51 +9,14 @@ use super::edges::{EmitterTriangles, SampleHit};
 use super::image::Image;
 use super::lights::{direct_radiance_from, LightSet, Receiver};
 use super::shading::{eye_direction, shading_normal};
-use super::surfaces::{
-    display_bin, display_radiance_in, splat_weight, vertex_values, Surfaces, MODE_VERTEX,
-};
+use super::splat::{pixel_sum, SplatGrid};
+use super::surfaces::{display_bin, display_radiance_in, vertex_values, Surfaces, MODE_VERTEX};
 use crate::raycast::RayCaster;
 use crate::scene::{Camera, Material, Scene};
 use crate::solver::Table;
 use crate::system::System;
 use glam::DVec3;
 use rayon::prelude::*;
-use std::collections::HashMap;
-
-/// Splatted element centers hashed on a grid of the largest splat radius.
-struct SplatGrid {
-    cell: f64,
-    cells: HashMap<(i64, i64, i64), Vec<u32>>,
-}
-
-impl SplatGrid {
-    fn new(surf: &Surfaces) -> Self {
-        let cell = surf.max_radius.max(1e-12);
-        let mut cells: HashMap<_, Vec<u32>> = HashMap::new();
-        for li in surf.splat_slots() {
-            let k = (surf.center[li as usize] / cell).floor();
-            cells
-                .entry((k.x as i64, k.y as i64, k.z as i64))
-                .or_default()
-                .push(li);
-        }
-        Self { cell, cells }
-    }
-
-    fn near(&self, p: DVec3, mut f: impl FnMut(u32)) {
-        let k = (p / self.cell).floor();
-        let (x, y, z) = (k.x as i64, k.y as i64, k.z as i64);
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
-                    if let Some(v) = self.cells.get(&(x + dx, y + dy, z + dz)) {
-                        v.iter().for_each(|&i| f(i));
-                    }
-                }
-            }
-        }
-    }
-}
 
 /// A 2×2 sample's surface point facing the eye: what its direct light needs, and its
 /// indirect light (splatted or vertex-interpolated).
@@ -66,6 +29,10 @@ struct Front {
     ns: DVec3,
     wo: DVec3,
     indirect: DVec3,
+    /// A splatted sample whose indirect light comes from the pixels' sums (`splat.rs`), not yet
+    /// taken (meanwhile its own leaf's radiance, what it keeps where no pixel around is on its
+    /// surface).
+    pending: bool,
 }
 
 /// What a 2×2 sample sees: the environment, a face from behind (black), or a face in front.
@@ -104,6 +71,7 @@ pub fn render(
     let ss = SUPERSAMPLE as usize;
     let (sw, sh) = (w * ss, h * ss);
     let emitters = EmitterTriangles::new(scene);
+    let per_sample = surf.splat_per_sample;
     // Every 2×2 sample first: what it sees, its emission, and what it hit (for the emitter
     // edges, `edges.rs`); the direct light comes per pixel, below.
     let mut samples = vec![(Seen::Background, DVec3::ZERO, SampleHit::Background); sw * sh];
@@ -143,6 +111,7 @@ pub fn render(
                             } else {
                                 (normal, normal, wo)
                             };
+                            let mut pending = false;
                             let indirect = if let Some(store) = store {
                                 store.radiance(p, normal, mat)
                             } else if surf.mode[li] == MODE_VERTEX {
@@ -150,31 +119,16 @@ pub fn render(
                                 verts[cv[0] as usize] * (1.0 - hit.u - hit.v)
                                     + verts[cv[1] as usize] * hit.u
                                     + verts[cv[2] as usize] * hit.v
-                            } else {
-                                let s = surf.surface[li];
+                            } else if per_sample || (sx % ss == 0 && sy % ss == 0) {
                                 let bin = display_bin(sys, dir, normal);
-                                let (mut acc, mut wsum) = (DVec3::ZERO, 0.0);
-                                grid.near(p, |e| {
-                                    let e = e as usize;
-                                    if surf.surface[e] == s {
-                                        let wt = splat_weight(
-                                            (p - surf.center[e]).length(),
-                                            surf.radius[e],
-                                        );
-                                        if wt > 0.0 {
-                                            if let Some(b) = bin {
-                                                let e = surf.leaf[e] as usize;
-                                                acc += display_radiance_in(sys, i_total, e, b) * wt;
-                                            }
-                                            wsum += wt;
-                                        }
-                                    }
-                                });
-                                if wsum > 0.0 {
-                                    acc / wsum
-                                } else {
-                                    DVec3::ZERO
-                                }
+                                grid.radiance(surf, sys, i_total, p, surf.surface[li], bin)
+                            } else {
+                                // Its own leaf's radiance where no pixel around has its
+                                // surface (`splat.rs`); else replaced by a pixel's sum below.
+                                pending = true;
+                                display_bin(sys, dir, normal).map_or(DVec3::ZERO, |b| {
+                                    display_radiance_in(sys, i_total, surf.leaf[li] as usize, b)
+                                })
                             };
                             let front = Front {
                                 p,
@@ -183,6 +137,7 @@ pub fn render(
                                 ns,
                                 wo,
                                 indirect,
+                                pending,
                             };
                             (Seen::Front(front), mat.ke, kind)
                         }
@@ -190,6 +145,9 @@ pub fn render(
                 };
             }
         });
+    if !per_sample {
+        take_pixel_sums(&mut samples, surf, (w, h));
+    }
     let sample =
         |px: usize, py: usize, i: usize, j: usize| &samples[(py * ss + j) * sw + px * ss + i];
     let sees_emitter = |px: usize, py: usize| {
@@ -279,6 +237,44 @@ pub fn render(
         width: view.width,
         height: view.height,
         pixels,
+    }
+}
+
+/// Gives each pending splatted sample its value from the sums of the pixels' first samples,
+/// which were evaluated (`splat.rs` pixel_sum); `size` is the image's in pixels.
+fn take_pixel_sums(samples: &mut [(Seen, DVec3, SampleHit)], surf: &Surfaces, size: (usize, usize)) {
+    let ss = SUPERSAMPLE as usize;
+    let (w, h) = size;
+    let sw = w * ss;
+    let first = |x: i64, y: i64| {
+        if x < 0 || y < 0 || x >= w as i64 || y >= h as i64 {
+            return None;
+        }
+        match &samples[y as usize * ss * sw + x as usize * ss].0 {
+            Seen::Front(f) if surf.mode[f.slot] != MODE_VERTEX => {
+                Some((surf.surface[f.slot], f.indirect))
+            }
+            _ => None,
+        }
+    };
+    let taken: Vec<(usize, DVec3)> = (0..samples.len())
+        .into_par_iter()
+        .filter_map(|k| match &samples[k].0 {
+            Seen::Front(f) if f.pending => {
+                let (sx, sy) = ((k % sw) as i64, (k / sw) as i64);
+                let (px, py) = (sx / ss as i64, sy / ss as i64);
+                let within = (sx % ss as i64, sy % ss as i64);
+                pixel_sum((px, py), within, ss as i64, surf.surface[f.slot], first)
+                    .map(|v| (k, v))
+            }
+            _ => None,
+        })
+        .collect();
+    for (k, v) in taken {
+        if let Seen::Front(f) = &mut samples[k].0 {
+            f.indirect = v;
+            f.pending = false;
+        }
     }
 }
 

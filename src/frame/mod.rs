@@ -11,6 +11,7 @@ pub mod image;
 pub mod lights;
 pub mod shading;
 pub mod shadow;
+pub mod splat;
 pub mod surfaces;
 
 pub use image::Image;

@@ -35,6 +35,9 @@ pub struct Surfaces {
     pub mode: Vec<u32>,
     /// Flat-surface id (splats only blend within one).
     pub surface: Vec<u32>,
+    /// Whether the splat sums are drawn per 2×2 sample (`solver.splat_per_sample`) rather than
+    /// once per pixel ([`crate::frame::splat`]).
+    pub splat_per_sample: bool,
     /// The leaf's center (splats are drawn once per leaf, from its first slot).
     pub center: Vec<DVec3>,
     /// The leaf's splat support radius.
@@ -89,6 +92,7 @@ impl Surfaces {
             normal: Vec::with_capacity(ns),
             mode: Vec::with_capacity(ns),
             surface: Vec::with_capacity(ns),
+            splat_per_sample: scene.solver.splat_per_sample,
             center: Vec::with_capacity(ns),
             radius: Vec::with_capacity(ns),
             max_radius: 0.0,

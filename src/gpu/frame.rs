@@ -37,7 +37,8 @@ struct FramePasses {
     shadow: passes::shadow::Shadow,
     /// G-buffer: position + leaf, vertex-interpolated indirect light.
     gbuffer: passes::gbuffer::GBuffer,
-    /// Splat fans, additive.
+    /// The splat texels' bins toward the eye, then the splat fans, additive.
+    eye_bins: passes::eye_bins::EyeBins,
     splat: passes::splat::Splat,
     /// Full-screen compose and 2×2 resolve.
     compose: passes::compose::Compose,
@@ -209,18 +210,31 @@ fn constants(
 
 impl GpuFrame {
     /// The frame's images for `camera` and `maps` under `features`, as data (what `info`
-    /// reports as `frame_images` and `shadow_maps`).
+    /// reports as `frame_images` and `shadow_maps`); `splat_per_sample`: `Surfaces`' setting.
     pub fn describe(
         camera: &Camera,
         features: &Features,
         maps: &ShadowMaps,
+        splat_per_sample: bool,
     ) -> FrameImages<ImageDesc> {
-        FrameImages::describe(camera.width, camera.height, features, maps.atlas)
+        FrameImages::describe(
+            camera.width,
+            camera.height,
+            features,
+            maps.atlas,
+            splat_per_sample,
+        )
     }
 
     /// Memory of the frame's images, by purpose.
-    pub fn planned_memory(camera: &Camera, features: &Features, maps: &ShadowMaps) -> MemoryReport {
-        MemoryReport::default().images(Self::describe(camera, features, maps).iter())
+    pub fn planned_memory(
+        camera: &Camera,
+        features: &Features,
+        maps: &ShadowMaps,
+        splat_per_sample: bool,
+    ) -> MemoryReport {
+        let images = Self::describe(camera, features, maps, splat_per_sample);
+        MemoryReport::default().images(images.iter())
     }
 
     /// Uploads the geometry, the lights and their shadow views of `f` and creates the frame's
@@ -240,7 +254,8 @@ impl GpuFrame {
         let t = std::time::Instant::now();
         let data = FrameData::new(f);
         let buffers = data.upload(c)?;
-        let images = Self::describe(camera, features, maps).try_map(|d| d.create(c))?;
+        let images = Self::describe(camera, features, maps, surf.splat_per_sample)
+            .try_map(|d| d.create(c))?;
         let uploads_ms = t.elapsed().as_secs_f64() * 1e3;
         let t = std::time::Instant::now();
         let kinds = descriptor_kinds(fb::COUNT, &fb::BUFFERS);
@@ -259,6 +274,7 @@ impl GpuFrame {
                 &specialization,
                 features,
             )?,
+            eye_bins: passes::eye_bins::EyeBins::new(c, &layouts.pipeline, &specialization)?,
             splat: passes::splat::Splat::new(c, &layouts.pipeline, &specialization)?,
             compose: passes::compose::Compose::new(c, &layouts.pipeline, &specialization)?,
         };
@@ -311,7 +327,7 @@ impl GpuFrame {
         if self.shadow_rects.is_empty() {
             unused.push((&mut im.shadow_map, crate::frame::shadow::EMPTY));
         }
-        if !self.features.vertex && !self.features.normals && !self.features.splat {
+        if !self.features.vertex && !self.features.normals {
             unused.push((&mut im.gbuf_vertex, 0.0));
         }
         if !self.features.normals {
@@ -319,6 +335,7 @@ impl GpuFrame {
         }
         if !self.features.splat {
             unused.push((&mut im.splat, 0.0));
+            unused.push((&mut im.splat_bins, -1.0));
         }
         if unused.is_empty() {
             return Ok(());
@@ -348,6 +365,7 @@ impl GpuFrame {
                     fb::GBUF_POSITION => im.gbuf_position.view,
                     fb::GBUF_VERTEX => im.gbuf_vertex.view,
                     fb::GBUF_NORMAL => im.gbuf_normal.view,
+                    fb::SPLAT_BINS => im.splat_bins.view,
                     _ => im.splat.view,
                 };
                 (b, view)
@@ -442,7 +460,10 @@ impl GpuFrame {
             ps.gbuffer.record(&p, images, corners)
         });
         if self.features.splat {
-            prof.scope(&ctx, cmd, "splat", || ps.splat.record(&p, images, splats));
+            prof.scope(&ctx, cmd, "splat", || {
+                ps.eye_bins.record(&p, images);
+                ps.splat.record(&p, images, splats)
+            });
         }
         prof.scope(&ctx, cmd, "compose", || ps.compose.record(&p, images));
     }

@@ -386,8 +386,10 @@ pub mod frame_binding {
     pub const EMITTERS: u32 = 12;
     /// G-buffer: interpolated shading normal (xyz) where the scene has `vn` (sampled).
     pub const GBUF_NORMAL: u32 = 13;
+    /// The splat texels' display bins toward the eye (R32F; −1 where none; sampled).
+    pub const SPLAT_BINS: u32 = 14;
     /// Number of bindings.
-    pub const COUNT: u32 = 14;
+    pub const COUNT: u32 = 15;
     /// Storage-buffer bindings (the rest are combined image samplers).
     pub const BUFFERS: [u32; 8] = [
         EMITTERS,

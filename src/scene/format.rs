@@ -329,6 +329,9 @@ pub struct SolverDesc {
     /// The area emitters' direct light at each of a pixel's 2×2 samples (default false: once
     /// per pixel where its samples lie on one flat surface).
     pub direct_per_sample: Option<bool>,
+    /// The splatted indirect light's kernel sum at each of a pixel's 2×2 samples (default
+    /// false: once per pixel, at its first sample).
+    pub splat_per_sample: Option<bool>,
     /// Scale each leaf's pushed radiance by its own view of its ancestors' senders (default true).
     pub receiver_calibration: Option<bool>,
 }

@@ -308,6 +308,11 @@ pub struct SolverSettings {
     /// (`frame::cpu::shared_direct`; on the Cornell box the compose pass 1,071 → 429 ms), which
     /// can differ at a penumbra sharper than a pixel (low resolutions).
     pub direct_per_sample: bool,
+    /// Whether the splat sums (§4.3) are drawn at each of a pixel's 2×2 samples; off (the
+    /// default), once per pixel at its first sample, the other samples taking their pixel's or
+    /// a neighbour's on their flat surface (`frame::splat`; on the Cornell box at 512² the splat
+    /// pass draws a quarter of the fragments).
+    pub splat_per_sample: bool,
     /// Whether each leaf scales the radiance pushed from its ancestors by how much more or
     /// less of their senders it sees than they do ([`crate::system::receivers`]; computed for
     /// still scenes); off, every leaf takes its cluster's radiance as it is (the paper's push).
@@ -362,6 +367,7 @@ impl Default for SolverSettings {
             face_clusters: true,
             extrapolate: true,
             direct_per_sample: false,
+            splat_per_sample: false,
             receiver_calibration: true,
         }
     }

@@ -145,6 +145,7 @@ pub fn solver_settings(s: &SolverDesc, path: &Path) -> Result<SolverSettings> {
         face_clusters: s.face_clusters.unwrap_or(d.face_clusters),
         extrapolate: s.extrapolate.unwrap_or(d.extrapolate),
         direct_per_sample: s.direct_per_sample.unwrap_or(d.direct_per_sample),
+        splat_per_sample: s.splat_per_sample.unwrap_or(d.splat_per_sample),
         receiver_calibration: s.receiver_calibration.unwrap_or(d.receiver_calibration),
         emitter_samples: match s.emitter_samples {
             None => d.emitter_samples,

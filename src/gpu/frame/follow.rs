@@ -21,7 +21,7 @@ impl GpuFrame {
     pub fn follow(&mut self, f: &FrameScene<'_>, moved: &[(DVec3, f64)]) -> Result<bool> {
         let (maps, features) = (f.maps, f.features);
         let same_images = *features == self.features
-            && Self::describe(f.camera, features, maps)
+            && Self::describe(f.camera, features, maps, f.surf.splat_per_sample)
                 .iter()
                 .zip(self.images.iter())
                 .all(|(d, im)| *d == im.desc);

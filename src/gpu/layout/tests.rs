@@ -170,6 +170,7 @@ fn frame_records_match_glsl() {
         "SPLAT",
         "EMITTERS",
         "GBUF_NORMAL",
+        "SPLAT_BINS",
     ];
     assert_eq!(names.len() as u32, frame_binding::COUNT);
     for (value, name) in names.iter().enumerate() {

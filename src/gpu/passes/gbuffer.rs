@@ -1,7 +1,7 @@
 //! G-buffer (§4.3, first of the three splatting passes): every element at 2×2 samples per
 //! pixel, depth-tested, storing position and leaf (the surface id comes with the leaf) and the
-//! vertex-interpolated indirect radiance of smooth meshes, the display bin toward the eye of
-//! splatted samples and, where the scene has OBJ `vn`, the interpolated shading normal.
+//! vertex-interpolated indirect radiance of smooth meshes and, where the scene has OBJ `vn`, the
+//! interpolated shading normal.
 
 use super::shadow::POSITION;
 use super::targets::{FrameImages, RGBA32F};
@@ -17,13 +17,12 @@ use crate::plan::Features;
 use ash::vk;
 use std::sync::Arc;
 
-/// How many colour targets the G-buffer has under `f`: position, then vertex radiance and the
-/// splat's display bin (also when only the normal needs it, attachments being positional), then
-/// the shading normal.
+/// How many colour targets the G-buffer has under `f`: position, then vertex radiance (also
+/// when only the normal needs it, attachments being positional), then the shading normal.
 fn target_count(f: &Features) -> usize {
     if f.normals {
         3
-    } else if f.vertex || f.splat {
+    } else if f.vertex {
         2
     } else {
         1

@@ -33,11 +33,30 @@ impl Splat {
     }
 
     /// Records the splat pass, one fan per record of `instances` (leaf slots): reads the
-    /// G-buffer (sampled), writes `splat` (left sampled).
+    /// G-buffer (sampled), writes `splat` (left sampled). Where `splat` has a texel per pixel
+    /// rather than per G-buffer sample, its viewport is shifted so that a texel's center is
+    /// the pixel's first sample (`frame::splat`): a fan covers it exactly where it covers that
+    /// sample.
     pub fn record(&self, p: &FramePass<'_>, im: &mut FrameImages<Image>, instances: Source) {
         transition(p.ctx, p.cmd, &mut [(&mut im.splat, Access::Attachment)]);
         begin_rendering(p.ctx, p.cmd, &[(&im.splat, Load::Clear)]);
-        p.bind(&self.pipeline, &p.constants);
+        let (e, g) = (im.splat.extent, im.gbuf_position.extent);
+        let per = (g.width / e.width).max(1) as f32;
+        let shift = 0.5 - 0.5 / per;
+        let viewport = vk::Viewport {
+            x: shift,
+            y: shift,
+            width: e.width as f32,
+            height: e.height as f32,
+            min_depth: 0.0,
+            max_depth: 1.0,
+        };
+        unsafe { p.ctx.device.cmd_set_viewport(p.cmd, 0, &[viewport]) };
+        // sizes.xy: the target's (splat.frag reads the G-buffer at its texel × the ratio).
+        let mut constants = p.constants;
+        constants.sizes[0] = e.width;
+        constants.sizes[1] = e.height;
+        p.bind(&self.pipeline, &constants);
         p.draw(instances.buffer, FAN_VERTICES, instances.count);
         end_rendering(p.ctx, p.cmd);
         transition(p.ctx, p.cmd, &mut [(&mut im.splat, Access::Sampled)]);

@@ -18,10 +18,8 @@ resource_set! {
         pub shadow_depth,
         /// G-buffer position + leaf (2W × 2H).
         pub gbuf_position,
-        /// G-buffer vertex-interpolated radiance, and in w the display bin toward the eye of a
-        /// splatted sample (−1 where none), so the splat reads it instead of finding it per
-        /// fragment (1×1 placeholder without smooth meshes, shading normals or flat surfaces:
-        /// the normal target comes after it).
+        /// G-buffer vertex-interpolated radiance (1×1 placeholder without smooth meshes or
+        /// shading normals: the normal target comes after it).
         pub gbuf_vertex,
         /// G-buffer interpolated shading normal (1×1 placeholder without OBJ `vn`).
         pub gbuf_normal,
@@ -29,6 +27,9 @@ resource_set! {
         pub gbuf_depth,
         /// Splat sums (Σ w·L, Σ w) (1×1 placeholder without flat surfaces).
         pub splat,
+        /// The display bin toward the eye at each splat texel's sample (R32F, −1 where none),
+        /// so the splat's fragments read it (1×1 placeholder without flat surfaces).
+        pub splat_bins,
         /// Final linear radiance (W × H).
         pub output,
     }
@@ -36,9 +37,26 @@ resource_set! {
 
 impl FrameImages<ImageDesc> {
     /// The images of a `width × height` frame with a shadow-map atlas of `atlas` texels
-    /// (width, height); the vertex-radiance and splat targets only where `features` draw them.
-    pub fn describe(width: u32, height: u32, features: &Features, atlas: (u32, u32)) -> Self {
+    /// (width, height); the vertex-radiance and splat targets only where `features` draw them,
+    /// the splat sums per pixel, or per 2×2 sample where `splat_per_sample` (`frame::splat`).
+    pub fn describe(
+        width: u32,
+        height: u32,
+        features: &Features,
+        atlas: (u32, u32),
+        splat_per_sample: bool,
+    ) -> Self {
         let (sw, sh) = (width * SUPERSAMPLE, height * SUPERSAMPLE);
+        let splat = match (features.splat, splat_per_sample) {
+            (false, _) => (1, 1),
+            (true, true) => (sw, sh),
+            (true, false) => (width, height),
+        };
+        let (sums, bins) = if features.splat {
+            ("splat sums", "splat bins")
+        } else {
+            ("splat sums (none)", "splat bins (none)")
+        };
         let frame = |name: &str, w, h, f| ImageDesc::new(name, w, h, f, Purpose::FrameImages);
         let shadow = |name: &str, f| {
             let (w, h) = (atlas.0.max(1), atlas.1.max(1));
@@ -50,7 +68,7 @@ impl FrameImages<ImageDesc> {
             gbuf_position: frame("G-buffer position", sw, sh, RGBA32F),
             // Attachments are positional: the normal target (location 2) needs the vertex
             // target (location 1) at full size before it.
-            gbuf_vertex: if features.vertex || features.normals || features.splat {
+            gbuf_vertex: if features.vertex || features.normals {
                 frame("G-buffer vertex radiance", sw, sh, RGBA32F)
             } else {
                 frame("G-buffer vertex radiance (none)", 1, 1, RGBA32F)
@@ -61,11 +79,8 @@ impl FrameImages<ImageDesc> {
                 frame("G-buffer shading normal (none)", 1, 1, RGBA32F)
             },
             gbuf_depth: frame("G-buffer depth", sw, sh, DEPTH_FORMAT),
-            splat: if features.splat {
-                frame("splat sums", sw, sh, RGBA32F)
-            } else {
-                frame("splat sums (none)", 1, 1, RGBA32F)
-            },
+            splat: frame(sums, splat.0, splat.1, RGBA32F),
+            splat_bins: frame(bins, splat.0, splat.1, vk::Format::R32_SFLOAT),
             output: frame("frame", width, height, RGBA32F),
         }
     }
