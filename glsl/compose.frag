@@ -95,12 +95,19 @@ uint ar_first_surface(ivec2 q, int ss) {
         return 0xFFFFFFFFu;
     }
     FrameElement e = elements[ar_gbuf_leaf(g.w)];
-    return e.ids.z == AR_MODE_VERTEX ? 0xFFFFFFFFu : e.ids.y;
+    // As the CPU's (frame/cpu.rs take_pixel_sums): a face seen from behind has no sum to give.
+    bool front = dot(pc.eye.xyz - g.xyz, e.face_normal.xyz) > 0.0;
+    return (e.ids.z == AR_MODE_VERTEX || !front) ? 0xFFFFFFFFu : e.ids.y;
 }
 
-// A sample whose first samples around have no weight on its surface: the sum of the first
-// neighbouring pixel whose first sample is on it, in splat.rs NEIGHBOURS order (none: a zero
-// weight).
+// The normalized sum of a splat texel (0 where no kernel reached it).
+vec3 ar_splat_value(vec4 s) {
+    return s.a > 0.0 ? s.rgb / s.a : vec3(0.0);
+}
+
+// A sample whose first samples around have no weight on its surface: the normalized sum of the
+// first neighbouring pixel whose first sample is on it, in splat.rs NEIGHBOURS order, with
+// weight 1 (none: a zero weight).
 vec4 ar_splat_neighbour(ivec2 px, int ss, uint surface) {
     ivec2 size = ivec2(pc.sizes.xy);
     for (int k = 0; k < 8; k++) {
@@ -111,15 +118,10 @@ vec4 ar_splat_neighbour(ivec2 px, int ss, uint surface) {
             continue;
         }
         if (ar_first_surface(q, ss) == surface) {
-            return texelFetch(splat_sum, q, 0);
+            return vec4(ar_splat_value(texelFetch(splat_sum, q, 0)), 1.0);
         }
     }
     return vec4(0.0);
-}
-
-// The normalized sum of a splat texel (0 where no kernel reached it).
-vec3 ar_splat_value(vec4 s) {
-    return s.a > 0.0 ? s.rgb / s.a : vec3(0.0);
 }
 
 // The samples of a pixel share one evaluation of the area emitters' direct light, at their mean
