@@ -598,7 +598,10 @@ fn per_pixel_against_per_sample(what: &str, set: fn(&mut Scene, bool), bounds: (
             let (per_pixel, per_sample) = (image(false), image(true));
             let (e, _) = antiradiance::metrics::relative_errors(&per_pixel, &per_sample).unwrap();
             println!("{name} {backend:?}: {what}, {e:.2e} relative RMSE against per sample");
-            assert!(e > bounds.0 && e < bounds.1, "{name} {backend:?}: {what} {e:.3e}");
+            assert!(
+                e > bounds.0 && e < bounds.1,
+                "{name} {backend:?}: {what} {e:.3e}"
+            );
         }
     }
 }

@@ -242,7 +242,11 @@ pub fn render(
 
 /// Gives each pending splatted sample its value from the sums of the pixels' first samples,
 /// which were evaluated (`splat.rs` pixel_sum); `size` is the image's in pixels.
-fn take_pixel_sums(samples: &mut [(Seen, DVec3, SampleHit)], surf: &Surfaces, size: (usize, usize)) {
+fn take_pixel_sums(
+    samples: &mut [(Seen, DVec3, SampleHit)],
+    surf: &Surfaces,
+    size: (usize, usize),
+) {
     let ss = SUPERSAMPLE as usize;
     let (w, h) = size;
     let sw = w * ss;
@@ -264,8 +268,7 @@ fn take_pixel_sums(samples: &mut [(Seen, DVec3, SampleHit)], surf: &Surfaces, si
                 let (sx, sy) = ((k % sw) as i64, (k / sw) as i64);
                 let (px, py) = (sx / ss as i64, sy / ss as i64);
                 let within = (sx % ss as i64, sy % ss as i64);
-                pixel_sum((px, py), within, ss as i64, surf.surface[f.slot], first)
-                    .map(|v| (k, v))
+                pixel_sum((px, py), within, ss as i64, surf.surface[f.slot], first).map(|v| (k, v))
             }
             _ => None,
         })

@@ -161,6 +161,8 @@ mod tests {
         n.sort();
         n.dedup();
         assert_eq!(n.len(), 8);
-        assert!(n.iter().all(|&(x, y)| x.abs() <= 1 && y.abs() <= 1 && (x, y) != (0, 0)));
+        assert!(n
+            .iter()
+            .all(|&(x, y)| x.abs() <= 1 && y.abs() <= 1 && (x, y) != (0, 0)));
     }
 }

@@ -46,7 +46,11 @@ impl EyeBins {
 
     /// Records the pass: reads the G-buffer (sampled), writes `splat_bins` (left sampled).
     pub fn record(&self, p: &FramePass<'_>, im: &mut FrameImages<Image>) {
-        transition(p.ctx, p.cmd, &mut [(&mut im.splat_bins, Access::Attachment)]);
+        transition(
+            p.ctx,
+            p.cmd,
+            &mut [(&mut im.splat_bins, Access::Attachment)],
+        );
         begin_rendering(p.ctx, p.cmd, &[(&im.splat_bins, Load::ClearTo(-1.0))]);
         // sizes.xy: the target's (eye_bins.frag reads the G-buffer at its texel × the ratio).
         let mut constants = p.constants;
