@@ -88,6 +88,7 @@ const float AR_PI = 3.14159265358979;
 #define AR_FRAME_EMITTERS 12
 #define AR_FRAME_GBUF_NORMAL 13
 #define AR_FRAME_SPLAT_BINS 14
+#define AR_FRAME_DIRECT_BLOCKS 15
 
 layout(push_constant) uniform FrameConstants {
     mat4 view_proj;   // camera, or the shadow view being drawn
@@ -95,6 +96,7 @@ layout(push_constant) uniform FrameConstants {
     vec4 environment; // rgb radiance where camera rays escape; w: exposure factor on the output
     uvec4 sizes;      // target width, height, bins, rows per column block
     uvec4 misc;       // light count, shadow view (compose: y..z the shared lights), supersampling
+                      // | direct block << 8 (frame/direct.rs)
 } pc;
 
 struct ShadowView {

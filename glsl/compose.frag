@@ -5,6 +5,7 @@
 // a pixel at an emitter's edge takes its emission from sub-pixel rays (src/frame/edges.rs).
 #extension GL_GOOGLE_include_directive : require
 #include "frame.glsl"
+#include "shared_direct.glsl"
 
 layout(location = 0) out vec4 color;
 
@@ -124,48 +125,55 @@ vec4 ar_splat_neighbour(ivec2 px, int ss, uint surface) {
     return vec4(0.0);
 }
 
-// The samples of a pixel share one evaluation of the area emitters' direct light, at their mean
-// position, where they all face the eye on one flat surface of one material (on one face slot
-// where shading normals interpolate): that light is smooth there (a penumbra over 32 emitter
-// samples) and it is most of the frame's cost. Point, spot and directional lights and instant
-// radiosity's VPLs stay per sample: their shadows can be sharper than a pixel (frame/cpu.rs
-// shared_direct). Returns the samples' mean position, their normals' sum and the first slot.
-bool ar_shares_direct(ivec2 px, int ss, out vec3 mid, out vec3 normal_sum, out uint slot0) {
-    mid = vec3(0.0);
-    normal_sum = vec3(0.0);
-    slot0 = 0u;
-    for (int k = 0; k < ss * ss; k++) {
-        ivec2 t = px * ss + ivec2(k % ss, k / ss);
-        vec4 g = texelFetch(gbuf_position, t, 0);
-        if (ar_gbuf_background(g.w)) {
-            return false;
+// frame/direct.rs SPREAD.
+const float AR_DIRECT_SPREAD = 0.2;
+
+// Pixel px's shared direct light from the blocks' corner pixels (frame/direct.rs block_direct):
+// the bilinear interpolation (a = 1) where every corner around it with a weight shares it on the
+// key of its `slot0` (surface, material, and the slot itself where shading normals interpolate)
+// and their lights agree within AR_DIRECT_SPREAD; else a = 0 (the pixel evaluates its own).
+vec4 ar_block_direct(ivec2 px, int ss, int block, uint slot0) {
+    ivec2 bpx = px / block;
+    vec2 f = vec2(px - bpx * block) / float(block);
+    ivec2 grid = textureSize(direct_blocks, 0);
+    FrameElement e = elements[slot0];
+    bool shaded = e.cos_norm.y > 0.5;
+    vec3 acc = vec3(0.0);
+    float lo = 3.0e38;
+    float hi = 0.0;
+    for (int k = 0; k < 4; k++) {
+        ivec2 c = ivec2(k % 2, k / 2);
+        float w = (c.x == 1 ? f.x : 1.0 - f.x) * (c.y == 1 ? f.y : 1.0 - f.y);
+        if (w <= 0.0) {
+            continue;
         }
-        uint slot = ar_gbuf_leaf(g.w);
-        FrameElement e = elements[slot];
-        if (dot(pc.eye.xyz - g.xyz, e.face_normal.xyz) <= 0.0) {
-            return false;
+        ivec2 q = bpx + c;
+        if (any(greaterThanEqual(q, grid))) {
+            return vec4(0.0);
         }
-        if (k == 0) {
-            slot0 = slot;
-        } else if (slot != slot0) {
-            FrameElement a = elements[slot0];
-            FrameElement b = elements[slot];
-            if (a.ids.y != b.ids.y || a.ids.w != b.ids.w || a.cos_norm.y > 0.5 || b.cos_norm.y > 0.5) {
-                return false;
-            }
+        vec4 d = texelFetch(direct_blocks, q, 0);
+        if (d.a < 0.5) {
+            return vec4(0.0);
         }
-        mid += g.xyz;
-        if (e.cos_norm.y > 0.5) {
-            normal_sum += texelFetch(gbuf_normal, t, 0).xyz;
+        uint slot = ar_gbuf_leaf(texelFetch(gbuf_position, q * block * ss, 0).w);
+        FrameElement o = elements[slot];
+        bool same = o.ids.y == e.ids.y && o.ids.w == e.ids.w
+            && ((shaded || o.cos_norm.y > 0.5) ? slot == slot0 : true);
+        if (!same) {
+            return vec4(0.0);
         }
+        acc += d.rgb * w;
+        float s = d.r + d.g + d.b;
+        lo = min(lo, s);
+        hi = max(hi, s);
     }
-    mid /= float(ss * ss);
-    return true;
+    return vec4(acc, hi - lo <= AR_DIRECT_SPREAD * hi ? 1.0 : 0.0);
 }
 
 void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
-    int ss = int(pc.misc.w);
+    int ss = int(pc.misc.w & 0xFFu);
+    int block = int(pc.misc.w >> 8u);
     vec3 rest = vec3(0.0);
     vec3 emission = vec3(0.0);
     vec3 mid;
@@ -189,16 +197,9 @@ void main() {
     }
     vec3 direct = vec3(0.0);
     if (shared_direct) {
-        FrameElement e = elements[slot0];
-        vec3 n = e.face_normal.xyz;
-        vec3 wo = normalize(pc.eye.xyz - mid);
-        if (dot(wo, n) > 0.0) {
-            vec3 ns = n;
-            if (e.cos_norm.y > 0.5) {
-                ns = ar_shading_normal(normal_sum, n, wo);
-            }
-            direct = ar_direct_radiance(mid, n, ns, materials[e.ids.w], wo, a, b, b, b);
-        }
+        // Interpolated from the blocks' corner pixels (direct_blocks.frag), else its own.
+        vec4 d = block > 1 ? ar_block_direct(px, ss, block, slot0) : vec4(0.0);
+        direct = d.a > 0.5 ? d.rgb : ar_shared_direct(mid, normal_sum, slot0, a, b);
     }
     for (int sy = 0; sy < ss; sy++) {
         for (int sx = 0; sx < ss; sx++) {

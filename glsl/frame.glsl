@@ -21,6 +21,7 @@ layout(binding = AR_FRAME_GBUF_VERTEX) uniform sampler2D gbuf_vertex;
 layout(binding = AR_FRAME_GBUF_NORMAL) uniform sampler2D gbuf_normal;
 layout(binding = AR_FRAME_SPLAT) uniform sampler2D splat_sum;
 layout(binding = AR_FRAME_SPLAT_BINS) uniform sampler2D splat_bins;
+layout(binding = AR_FRAME_DIRECT_BLOCKS) uniform sampler2D direct_blocks;
 layout(std430, binding = AR_FRAME_EMITTERS) readonly buffer Emitters { EmitterTriangle emitter_tris[]; };
 
 const float AR_SHADOW_DEPTH_BIAS = 0.1;

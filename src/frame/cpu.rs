@@ -5,6 +5,7 @@
 //! pixels at an emitter's edge take its emission from sub-pixel rays (`edges.rs`).
 
 use super::camera::{View, SUPERSAMPLE};
+use super::direct;
 use super::edges::{EmitterTriangles, SampleHit};
 use super::image::Image;
 use super::lights::{direct_radiance_from, LightSet, Receiver};
@@ -170,32 +171,71 @@ pub fn render(
         };
         direct_radiance_from(lights, maps, &r, material(f.slot), range)
     };
+    let seen_at = |px: usize, py: usize| -> [Seen; (SUPERSAMPLE * SUPERSAMPLE) as usize] {
+        std::array::from_fn(|k| sample(px, py, k % ss, k / ss).0)
+    };
+    // The shared lights' direct light at a pixel's samples' mean (`shared_direct`).
+    let shared_at = |(mid, interpolated, slot): (DVec3, DVec3, usize)| {
+        let normal = surf.normal[slot];
+        let wo = (view.eye - mid).normalize();
+        if wo.dot(normal) <= 0.0 {
+            return DVec3::ZERO;
+        }
+        let ns = if surf.shaded[slot] {
+            shading_normal(interpolated, normal, wo)
+        } else {
+            normal
+        };
+        let r = Receiver {
+            p: mid,
+            n: normal,
+            shading: ns,
+            wo,
+        };
+        direct_radiance_from(lights, maps, &r, material(slot), shared_lights.clone())
+    };
+    let key = |slot: usize| -> direct::Key {
+        let m = sys.leaves[surf.leaf[slot] as usize].material;
+        let shaded = if surf.shaded[slot] {
+            slot as u32
+        } else {
+            u32::MAX
+        };
+        (surf.surface[slot], m, shaded)
+    };
+    let share = !shared_lights.is_empty();
+    // Only the blocks' corner pixels evaluate it; the others interpolate (`direct.rs`).
+    let block = direct::block_for(surf.direct_block, &shared_lights) as usize;
+    let (gw, gh) = direct::grid(w, h, block);
+    let blocks: Vec<Option<(direct::Key, DVec3)>> = if share && block > 1 {
+        (0..gw * gh)
+            .into_par_iter()
+            .map(|k| {
+                let seen = seen_at(k % gw * block, k / gw * block);
+                shared_direct(&seen, surf, sys).map(|s| (key(s.2), shared_at(s)))
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
     let n = (ss * ss) as f64;
     let mut pixels = vec![[0f32; 3]; w * h];
     pixels.par_chunks_mut(w).enumerate().for_each(|(py, row)| {
         for (px, out) in row.iter_mut().enumerate() {
-            let seen: [Seen; (SUPERSAMPLE * SUPERSAMPLE) as usize] =
-                std::array::from_fn(|k| sample(px, py, k % ss, k / ss).0);
-            let share = !shared_lights.is_empty();
+            let seen = seen_at(px, py);
             let shared = share.then(|| shared_direct(&seen, surf, sys)).flatten();
-            let shared = shared.map(|(mid, interpolated, slot)| {
-                let normal = surf.normal[slot];
-                let wo = (view.eye - mid).normalize();
-                if wo.dot(normal) <= 0.0 {
-                    return DVec3::ZERO;
-                }
-                let ns = if surf.shaded[slot] {
-                    shading_normal(interpolated, normal, wo)
-                } else {
-                    normal
+            let shared = shared.map(|s| {
+                let corner = |i: usize, j: usize| {
+                    if i < gw && j < gh {
+                        blocks[j * gw + i]
+                    } else {
+                        None
+                    }
                 };
-                let r = Receiver {
-                    p: mid,
-                    n: normal,
-                    shading: ns,
-                    wo,
-                };
-                direct_radiance_from(lights, maps, &r, material(slot), shared_lights.clone())
+                (block > 1)
+                    .then(|| direct::block_direct((px, py), block, key(s.2), corner))
+                    .flatten()
+                    .unwrap_or_else(|| shared_at(s))
             });
             let (mut rest, mut emission) = (DVec3::ZERO, DVec3::ZERO);
             for k in 0..ss * ss {

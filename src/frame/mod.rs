@@ -4,6 +4,7 @@
 
 pub mod camera;
 pub mod cpu;
+pub mod direct;
 pub mod edges;
 pub mod emitters;
 pub mod environment;

@@ -38,6 +38,9 @@ pub struct Surfaces {
     /// Whether the splat sums are drawn per 2×2 sample (`solver.splat_per_sample`) rather than
     /// once per pixel ([`crate::frame::splat`]).
     pub splat_per_sample: bool,
+    /// Pixels per side of the blocks sharing the area emitters' direct light
+    /// (`solver.direct_block`, [`crate::frame::direct`]).
+    pub direct_block: u32,
     /// The leaf's center (splats are drawn once per leaf, from its first slot).
     pub center: Vec<DVec3>,
     /// The leaf's splat support radius.
@@ -93,6 +96,7 @@ impl Surfaces {
             mode: Vec::with_capacity(ns),
             surface: Vec::with_capacity(ns),
             splat_per_sample: scene.solver.splat_per_sample,
+            direct_block: scene.solver.direct_block,
             center: Vec::with_capacity(ns),
             radius: Vec::with_capacity(ns),
             max_radius: 0.0,

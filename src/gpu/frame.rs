@@ -40,7 +40,9 @@ struct FramePasses {
     /// The splat texels' bins toward the eye, then the splat fans, additive.
     eye_bins: passes::eye_bins::EyeBins,
     splat: passes::splat::Splat,
-    /// Full-screen compose and 2×2 resolve.
+    /// The area emitters' shared direct light at the blocks' corner pixels, then the
+    /// full-screen compose and 2×2 resolve.
+    direct_blocks: passes::direct_blocks::DirectBlocks,
     compose: passes::compose::Compose,
 }
 
@@ -157,6 +159,9 @@ pub struct GpuFrame {
     corner_count: u32,
     splat_count: u32,
     features: Features,
+    /// Pixels per side of the blocks sharing the area emitters' direct light (1: none;
+    /// `frame::direct`), fixed with the images.
+    direct_block: u32,
     /// Each shadow view's map in the atlas: x, y, side.
     shadow_rects: Vec<[u32; 3]>,
     /// The shadow views the maps are (to be) rendered for.
@@ -179,11 +184,12 @@ pub struct GpuFrame {
     layouts: Layouts,
 }
 
-/// The frame's push constants for `camera` over `scene` (its bounds set the depth range).
+/// The frame's push constants for `camera` over `scene` (its bounds set the depth range), the
+/// lights `shared` shared by blocks of `block` pixels per side.
 fn constants(
     scene: &Scene,
     lights: usize,
-    shared: (usize, usize),
+    (shared, block): ((usize, usize), u32),
     camera: &Camera,
     sys: &System,
 ) -> FrameConstants {
@@ -203,19 +209,27 @@ fn constants(
             0,
         ],
         // y: the shadow pass's view (shadow.rs); for compose, y..z the lights whose direct
-        // light a pixel's samples share.
-        misc: [lights as u32, shared.0 as u32, shared.1 as u32, SUPERSAMPLE],
+        // light a pixel's samples share; w: the supersampling, and the direct light's block
+        // (`frame::direct`) above it.
+        misc: [
+            lights as u32,
+            shared.0 as u32,
+            shared.1 as u32,
+            SUPERSAMPLE | block << 8,
+        ],
     }
 }
 
 impl GpuFrame {
     /// The frame's images for `camera` and `maps` under `features`, as data (what `info`
-    /// reports as `frame_images` and `shadow_maps`); `splat_per_sample`: `Surfaces`' setting.
+    /// reports as `frame_images` and `shadow_maps`); `splat_per_sample`: `Surfaces`' setting;
+    /// `direct_block`: the blocks sharing the direct light ([`crate::frame::direct::block_for`]).
     pub fn describe(
         camera: &Camera,
         features: &Features,
         maps: &ShadowMaps,
         splat_per_sample: bool,
+        direct_block: u32,
     ) -> FrameImages<ImageDesc> {
         FrameImages::describe(
             camera.width,
@@ -223,6 +237,7 @@ impl GpuFrame {
             features,
             maps.atlas,
             splat_per_sample,
+            direct_block,
         )
     }
 
@@ -232,8 +247,9 @@ impl GpuFrame {
         features: &Features,
         maps: &ShadowMaps,
         splat_per_sample: bool,
+        direct_block: u32,
     ) -> MemoryReport {
-        let images = Self::describe(camera, features, maps, splat_per_sample);
+        let images = Self::describe(camera, features, maps, splat_per_sample, direct_block);
         MemoryReport::default().images(images.iter())
     }
 
@@ -254,7 +270,9 @@ impl GpuFrame {
         let t = std::time::Instant::now();
         let data = FrameData::new(f);
         let buffers = data.upload(c)?;
-        let images = Self::describe(camera, features, maps, surf.splat_per_sample)
+        let shared = shared_lights.0..shared_lights.1;
+        let direct_block = crate::frame::direct::block_for(surf.direct_block, &shared);
+        let images = Self::describe(camera, features, maps, surf.splat_per_sample, direct_block)
             .try_map(|d| d.create(c))?;
         let uploads_ms = t.elapsed().as_secs_f64() * 1e3;
         let t = std::time::Instant::now();
@@ -276,6 +294,11 @@ impl GpuFrame {
             )?,
             eye_bins: passes::eye_bins::EyeBins::new(c, &layouts.pipeline, &specialization)?,
             splat: passes::splat::Splat::new(c, &layouts.pipeline, &specialization)?,
+            direct_blocks: passes::direct_blocks::DirectBlocks::new(
+                c,
+                &layouts.pipeline,
+                &specialization,
+            )?,
             compose: passes::compose::Compose::new(c, &layouts.pipeline, &specialization)?,
         };
         let setup = super::solver::SetupTimes {
@@ -289,6 +312,7 @@ impl GpuFrame {
             corner_count: data.corners.len() as u32,
             splat_count: pack::splat_instances(surf, features.splat).len() as u32,
             features: *features,
+            direct_block,
             shadow_rects: maps
                 .views
                 .iter()
@@ -300,7 +324,13 @@ impl GpuFrame {
             i_total: None,
             exposure: 1.0,
             staged: super::staged::Staged::new(c),
-            constants: constants(scene, lights.len(), shared_lights, camera, sys),
+            constants: constants(
+                scene,
+                lights.len(),
+                (shared_lights, direct_block),
+                camera,
+                sys,
+            ),
             profiler: Profiler::new(c, 16)?,
             ctx: ctx.clone(),
             images,
@@ -337,6 +367,9 @@ impl GpuFrame {
             unused.push((&mut im.splat, 0.0));
             unused.push((&mut im.splat_bins, -1.0));
         }
+        if self.direct_block <= 1 {
+            unused.push((&mut im.direct_blocks, 0.0));
+        }
         if unused.is_empty() {
             return Ok(());
         }
@@ -366,6 +399,7 @@ impl GpuFrame {
                     fb::GBUF_VERTEX => im.gbuf_vertex.view,
                     fb::GBUF_NORMAL => im.gbuf_normal.view,
                     fb::SPLAT_BINS => im.splat_bins.view,
+                    fb::DIRECT_BLOCKS => im.direct_blocks.view,
                     _ => im.splat.view,
                 };
                 (b, view)
@@ -465,6 +499,11 @@ impl GpuFrame {
                 ps.splat.record(&p, images, splats)
             });
         }
+        if self.direct_block > 1 {
+            prof.scope(&ctx, cmd, "direct_blocks", || {
+                ps.direct_blocks.record(&p, images)
+            });
+        }
         prof.scope(&ctx, cmd, "compose", || ps.compose.record(&p, images));
     }
 
@@ -518,7 +557,7 @@ impl GpuFrame {
         }
         let m = self.constants.misc;
         let shared = (m[1] as usize, m[2] as usize);
-        self.constants = constants(scene, lights, shared, camera, sys);
+        self.constants = constants(scene, lights, (shared, self.direct_block), camera, sys);
         Ok(())
     }
 

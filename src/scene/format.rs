@@ -332,6 +332,9 @@ pub struct SolverDesc {
     /// The splatted indirect light's kernel sum at each of a pixel's 2×2 samples (default
     /// false: once per pixel, at its first sample).
     pub splat_per_sample: Option<bool>,
+    /// Pixels per side of the blocks sharing the area emitters' direct light (default 2; 1:
+    /// per pixel).
+    pub direct_block: Option<i64>,
     /// Scale each leaf's pushed radiance by its own view of its ancestors' senders (default true).
     pub receiver_calibration: Option<bool>,
 }

@@ -313,6 +313,11 @@ pub struct SolverSettings {
     /// a neighbour's on their flat surface (`frame::splat`; on the Cornell box at 512² the splat
     /// pass draws a quarter of the fragments).
     pub splat_per_sample: bool,
+    /// Pixels per side of the blocks whose corner pixels evaluate the area emitters' shared
+    /// direct light (1..=[`MAX_DIRECT_BLOCK`]; default 2): the other pixels interpolate it
+    /// bilinearly between the corners on their flat surface, or evaluate their own where none
+    /// is (`frame::direct`); 1 evaluates it at every pixel.
+    pub direct_block: u32,
     /// Whether each leaf scales the radiance pushed from its ancestors by how much more or
     /// less of their senders it sees than they do ([`crate::system::receivers`]; computed for
     /// still scenes); off, every leaf takes its cluster's radiance as it is (the paper's push).
@@ -321,6 +326,10 @@ pub struct SolverSettings {
 
 /// Most emitter samples (each has six shadow-map faces).
 pub const MAX_EMITTER_SAMPLES: usize = 4096;
+
+/// Largest `solver.direct_block` (beyond, a penumbra is interpolated over more pixels than the
+/// shadow filter blurs it).
+pub const MAX_DIRECT_BLOCK: u32 = 8;
 
 /// `solver.tolerance` of a scene file that gives neither `iterations` nor `tolerance`: the
 /// iteration runs until the monitor's estimated error is 1%. Measured (32², CPU): the Cornell
@@ -368,6 +377,7 @@ impl Default for SolverSettings {
             extrapolate: true,
             direct_per_sample: false,
             splat_per_sample: false,
+            direct_block: 2,
             receiver_calibration: true,
         }
     }

@@ -147,6 +147,19 @@ pub fn solver_settings(s: &SolverDesc, path: &Path) -> Result<SolverSettings> {
         direct_per_sample: s.direct_per_sample.unwrap_or(d.direct_per_sample),
         splat_per_sample: s.splat_per_sample.unwrap_or(d.splat_per_sample),
         receiver_calibration: s.receiver_calibration.unwrap_or(d.receiver_calibration),
+        direct_block: match s.direct_block {
+            None => d.direct_block,
+            Some(n) if (1..=super::MAX_DIRECT_BLOCK as i64).contains(&n) => n as u32,
+            Some(n) => {
+                return Err(scene_err(
+                    path,
+                    format!(
+                        "`solver.direct_block` must be 1..={}, got {n}",
+                        super::MAX_DIRECT_BLOCK
+                    ),
+                ))
+            }
+        },
         emitter_samples: match s.emitter_samples {
             None => d.emitter_samples,
             Some(n) if (0..=super::MAX_EMITTER_SAMPLES as i64).contains(&n) => Some(n as usize),

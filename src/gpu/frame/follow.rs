@@ -20,8 +20,11 @@ impl GpuFrame {
     /// the frame must be made anew.
     pub fn follow(&mut self, f: &FrameScene<'_>, moved: &[(DVec3, f64)]) -> Result<bool> {
         let (maps, features) = (f.maps, f.features);
+        let shared = f.shared_lights.0..f.shared_lights.1;
+        let block = crate::frame::direct::block_for(f.surf.direct_block, &shared);
         let same_images = *features == self.features
-            && Self::describe(f.camera, features, maps, f.surf.splat_per_sample)
+            && block == self.direct_block
+            && Self::describe(f.camera, features, maps, f.surf.splat_per_sample, block)
                 .iter()
                 .zip(self.images.iter())
                 .all(|(d, im)| *d == im.desc);
@@ -63,7 +66,8 @@ impl GpuFrame {
         self.staged.release();
         self.corner_count = data.corners.len() as u32;
         self.splat_count = pack::splat_instances(f.surf, features.splat).len() as u32;
-        self.constants = constants(f.scene, f.lights.len(), f.shared_lights, f.camera, f.sys);
+        let shared = (f.shared_lights, self.direct_block);
+        self.constants = constants(f.scene, f.lights.len(), shared, f.camera, f.sys);
         // Views marked by an earlier follow and not drawn since stay marked.
         let pending = self.only.take();
         let only: Vec<bool> = maps

@@ -171,6 +171,7 @@ fn frame_records_match_glsl() {
         "EMITTERS",
         "GBUF_NORMAL",
         "SPLAT_BINS",
+        "DIRECT_BLOCKS",
     ];
     assert_eq!(names.len() as u32, frame_binding::COUNT);
     for (value, name) in names.iter().enumerate() {

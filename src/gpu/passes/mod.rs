@@ -6,6 +6,7 @@
 //! dropping the struct frees its pipelines.
 
 pub mod compose;
+pub mod direct_blocks;
 pub mod eye_bins;
 pub mod gbuffer;
 pub mod global;

@@ -30,6 +30,9 @@ resource_set! {
         /// The display bin toward the eye at each splat texel's sample (R32F, −1 where none),
         /// so the splat's fragments read it (1×1 placeholder without flat surfaces).
         pub splat_bins,
+        /// The area emitters' shared direct light at each block's corner pixel (`frame::direct`;
+        /// 1×1 placeholder where no block is shared).
+        pub direct_blocks,
         /// Final linear radiance (W × H).
         pub output,
     }
@@ -38,13 +41,15 @@ resource_set! {
 impl FrameImages<ImageDesc> {
     /// The images of a `width × height` frame with a shadow-map atlas of `atlas` texels
     /// (width, height); the vertex-radiance and splat targets only where `features` draw them,
-    /// the splat sums per pixel, or per 2×2 sample where `splat_per_sample` (`frame::splat`).
+    /// the splat sums per pixel, or per 2×2 sample where `splat_per_sample` (`frame::splat`); the
+    /// direct light's blocks where `direct_block` (pixels per side) is above 1 (`frame::direct`).
     pub fn describe(
         width: u32,
         height: u32,
         features: &Features,
         atlas: (u32, u32),
         splat_per_sample: bool,
+        direct_block: u32,
     ) -> Self {
         let (sw, sh) = (width * SUPERSAMPLE, height * SUPERSAMPLE);
         let splat = match (features.splat, splat_per_sample) {
@@ -81,6 +86,13 @@ impl FrameImages<ImageDesc> {
             gbuf_depth: frame("G-buffer depth", sw, sh, DEPTH_FORMAT),
             splat: frame(sums, splat.0, splat.1, RGBA32F),
             splat_bins: frame(bins, splat.0, splat.1, vk::Format::R32_SFLOAT),
+            direct_blocks: if direct_block > 1 {
+                let b = direct_block as usize;
+                let (gw, gh) = crate::frame::direct::grid(width as usize, height as usize, b);
+                frame("direct light blocks", gw as u32, gh as u32, RGBA32F)
+            } else {
+                frame("direct light blocks (none)", 1, 1, RGBA32F)
+            },
             output: frame("frame", width, height, RGBA32F),
         }
     }
