@@ -126,10 +126,11 @@ vec4 ar_splat_neighbour(ivec2 px, int ss, uint surface) {
 }
 
 // frame/direct.rs SPREAD.
-const float AR_DIRECT_SPREAD = 0.2;
+const float AR_DIRECT_SPREAD = 0.1;
 
 // Pixel px's shared direct light from the blocks' corner pixels (frame/direct.rs block_direct):
-// the bilinear interpolation (a = 1) where every corner around it with a weight shares it on the
+// the bilinear interpolation, perspective-correct by the corners' inverse depths (in their a),
+// with a = 1 where every corner around it with a weight shares it on the
 // key of its `slot0` (surface, material, and the slot itself where shading normals interpolate)
 // and their lights agree within AR_DIRECT_SPREAD; else a = 0 (the pixel evaluates its own).
 vec4 ar_block_direct(ivec2 px, int ss, int block, uint slot0) {
@@ -139,6 +140,7 @@ vec4 ar_block_direct(ivec2 px, int ss, int block, uint slot0) {
     FrameElement e = elements[slot0];
     bool shaded = e.cos_norm.y > 0.5;
     vec3 acc = vec3(0.0);
+    float wsum = 0.0;
     float lo = 3.0e38;
     float hi = 0.0;
     for (int k = 0; k < 4; k++) {
@@ -152,7 +154,7 @@ vec4 ar_block_direct(ivec2 px, int ss, int block, uint slot0) {
             return vec4(0.0);
         }
         vec4 d = texelFetch(direct_blocks, q, 0);
-        if (d.a < 0.5) {
+        if (d.a <= 0.0) {
             return vec4(0.0);
         }
         uint slot = ar_gbuf_leaf(texelFetch(gbuf_position, q * block * ss, 0).w);
@@ -162,12 +164,13 @@ vec4 ar_block_direct(ivec2 px, int ss, int block, uint slot0) {
         if (!same) {
             return vec4(0.0);
         }
-        acc += d.rgb * w;
+        acc += d.rgb * (w * d.a);
+        wsum += w * d.a;
         float s = d.r + d.g + d.b;
         lo = min(lo, s);
         hi = max(hi, s);
     }
-    return vec4(acc, hi - lo <= AR_DIRECT_SPREAD * hi ? 1.0 : 0.0);
+    return (hi - lo <= AR_DIRECT_SPREAD * hi && wsum > 0.0) ? vec4(acc / wsum, 1.0) : vec4(0.0);
 }
 
 void main() {

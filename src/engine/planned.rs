@@ -102,7 +102,11 @@ impl Prepared {
             &plan.features,
             &self.maps,
             self.surfaces.splat_per_sample,
-            crate::frame::direct::block_for(self.surfaces.direct_block, &self.shared_lights),
+            crate::frame::direct::block_for(
+                self.surfaces.direct_block,
+                &self.shared_lights,
+                (self.camera.width, self.camera.height),
+            ),
         );
         memory_bytes.insert("frame_images".into(), frame.get(Purpose::FrameImages));
         memory_bytes.insert("shadow_maps".into(), frame.get(Purpose::ShadowMaps));

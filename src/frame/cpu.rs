@@ -205,14 +205,18 @@ pub fn render(
     };
     let share = !shared_lights.is_empty();
     // Only the blocks' corner pixels evaluate it; the others interpolate (`direct.rs`).
-    let block = direct::block_for(surf.direct_block, &shared_lights) as usize;
+    let size = (view.width, view.height);
+    let block = direct::block_for(surf.direct_block, &shared_lights, size) as usize;
     let (gw, gh) = direct::grid(w, h, block);
-    let blocks: Vec<Option<(direct::Key, DVec3)>> = if share && block > 1 {
+    let blocks: Vec<Option<direct::Corner>> = if share && block > 1 {
         (0..gw * gh)
             .into_par_iter()
             .map(|k| {
                 let seen = seen_at(k % gw * block, k / gw * block);
-                shared_direct(&seen, surf, sys).map(|s| (key(s.2), shared_at(s)))
+                shared_direct(&seen, surf, sys).map(|s| {
+                    let inv_depth = 1.0 / (s.0 - view.eye).dot(view.forward);
+                    (key(s.2), shared_at(s), inv_depth)
+                })
             })
             .collect()
     } else {

@@ -39,8 +39,8 @@ pub struct Surfaces {
     /// once per pixel ([`crate::frame::splat`]).
     pub splat_per_sample: bool,
     /// Pixels per side of the blocks sharing the area emitters' direct light
-    /// (`solver.direct_block`, [`crate::frame::direct`]).
-    pub direct_block: u32,
+    /// (`solver.direct_block`, [`crate::frame::direct::block_for`]; `None`: by the frame's size).
+    pub direct_block: Option<u32>,
     /// The leaf's center (splats are drawn once per leaf, from its first slot).
     pub center: Vec<DVec3>,
     /// The leaf's splat support radius.

@@ -271,7 +271,8 @@ impl GpuFrame {
         let data = FrameData::new(f);
         let buffers = data.upload(c)?;
         let shared = shared_lights.0..shared_lights.1;
-        let direct_block = crate::frame::direct::block_for(surf.direct_block, &shared);
+        let size = (camera.width, camera.height);
+        let direct_block = crate::frame::direct::block_for(surf.direct_block, &shared, size);
         let images = Self::describe(camera, features, maps, surf.splat_per_sample, direct_block)
             .try_map(|d| d.create(c))?;
         let uploads_ms = t.elapsed().as_secs_f64() * 1e3;

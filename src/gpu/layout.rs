@@ -388,8 +388,9 @@ pub mod frame_binding {
     pub const GBUF_NORMAL: u32 = 13;
     /// The splat texels' display bins toward the eye (R32F; −1 where none; sampled).
     pub const SPLAT_BINS: u32 = 14;
-    /// The area emitters' shared direct light at each block's corner pixel (RGBA32F; a = 1
-    /// where that pixel shares it; sampled; `frame::direct`).
+    /// The area emitters' shared direct light at each block's corner pixel (RGBA32F; a: the
+    /// inverse depth of its samples' mean where that pixel shares it, else 0; sampled;
+    /// `frame::direct`).
     pub const DIRECT_BLOCKS: u32 = 15;
     /// Number of bindings.
     pub const COUNT: u32 = 16;

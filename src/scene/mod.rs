@@ -314,10 +314,11 @@ pub struct SolverSettings {
     /// pass draws a quarter of the fragments).
     pub splat_per_sample: bool,
     /// Pixels per side of the blocks whose corner pixels evaluate the area emitters' shared
-    /// direct light (1..=[`MAX_DIRECT_BLOCK`]; default 2): the other pixels interpolate it
-    /// bilinearly between the corners on their flat surface, or evaluate their own where none
-    /// is (`frame::direct`); 1 evaluates it at every pixel.
-    pub direct_block: u32,
+    /// direct light (1..=[`MAX_DIRECT_BLOCK`]): the other pixels interpolate it between the
+    /// corners on their surface where those agree, else evaluate their own (`frame::direct`);
+    /// 1 evaluates it at every pixel; `None` (the default): 2 on frames of at least
+    /// `frame::direct::MIN_BLOCK_PIXELS` pixels, else 1.
+    pub direct_block: Option<u32>,
     /// Whether each leaf scales the radiance pushed from its ancestors by how much more or
     /// less of their senders it sees than they do ([`crate::system::receivers`]; computed for
     /// still scenes); off, every leaf takes its cluster's radiance as it is (the paper's push).
@@ -377,7 +378,7 @@ impl Default for SolverSettings {
             extrapolate: true,
             direct_per_sample: false,
             splat_per_sample: false,
-            direct_block: 2,
+            direct_block: None,
             receiver_calibration: true,
         }
     }

@@ -149,7 +149,7 @@ pub fn solver_settings(s: &SolverDesc, path: &Path) -> Result<SolverSettings> {
         receiver_calibration: s.receiver_calibration.unwrap_or(d.receiver_calibration),
         direct_block: match s.direct_block {
             None => d.direct_block,
-            Some(n) if (1..=super::MAX_DIRECT_BLOCK as i64).contains(&n) => n as u32,
+            Some(n) if (1..=super::MAX_DIRECT_BLOCK as i64).contains(&n) => Some(n as u32),
             Some(n) => {
                 return Err(scene_err(
                     path,

@@ -21,7 +21,8 @@ impl GpuFrame {
     pub fn follow(&mut self, f: &FrameScene<'_>, moved: &[(DVec3, f64)]) -> Result<bool> {
         let (maps, features) = (f.maps, f.features);
         let shared = f.shared_lights.0..f.shared_lights.1;
-        let block = crate::frame::direct::block_for(f.surf.direct_block, &shared);
+        let size = (f.camera.width, f.camera.height);
+        let block = crate::frame::direct::block_for(f.surf.direct_block, &shared, size);
         let same_images = *features == self.features
             && block == self.direct_block
             && Self::describe(f.camera, features, maps, f.surf.splat_per_sample, block)
