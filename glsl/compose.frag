@@ -29,6 +29,12 @@ uint sample_hit(ivec2 t, out float dist) {
     return 2u;
 }
 
+// The unit camera ray through framebuffer position fb (edges.rs edge_emission's `ray`).
+vec3 ar_pixel_ray(mat4 inv, vec2 fb, vec2 size, vec3 eye) {
+    vec4 w = inv * vec4(fb / size * 2.0 - 1.0, 0.0, 1.0);
+    return normalize(w.xyz / w.w - eye);
+}
+
 // edges.rs EmitterTriangles::edge_emission.
 vec3 edge_emission(ivec2 px, int ss) {
     uint count = uint(emitter_tris.length());
@@ -43,12 +49,56 @@ vec3 edge_emission(ivec2 px, int ss) {
     mat4 inv = inverse(pc.view_proj);
     vec2 size = vec2(pc.sizes.xy);  // the output's size (compose.rs)
     vec3 eye = pc.eye.xyz;
+    // Most edge pixels need no sub-rays: the ring around an emitter that its footprint misses,
+    // and the inside that one triangle covers whole. Every sub-ray is a positive combination of
+    // the pixel's 4 corner rays, so a triangle whose barycentric conditions fail (or hold) for
+    // all 4 corners alike fails (holds) for every sub-ray: the sub-ray loop below then gives 0,
+    // or that triangle's Ke where the 4 samples all hit an emitter (nothing blocks a sub-ray).
+    vec3 d00 = ar_pixel_ray(inv, vec2(px), size, eye);
+    vec3 d10 = ar_pixel_ray(inv, vec2(px) + vec2(1.0, 0.0), size, eye);
+    vec3 d01 = ar_pixel_ray(inv, vec2(px) + vec2(0.0, 1.0), size, eye);
+    vec3 d11 = ar_pixel_ray(inv, vec2(px) + vec2(1.0, 1.0), size, eye);
+    uint candidates = 0u;
+    bool covered = false;
+    vec3 covered_ke = vec3(0.0);
+    for (uint k = 0u; k < count; k++) {
+        EmitterTriangle tri = emitter_tris[k];
+        vec3 e1 = tri.c1.xyz - tri.c0.xyz;
+        vec3 e2 = tri.c2.xyz - tri.c0.xyz;
+        vec3 s = eye - tri.c0.xyz;
+        // Möller–Trumbore with the ray's direction d factored out: det = d·a, u·det = d·b,
+        // v·det = d·c, t·det = e2·c.
+        vec3 a = cross(e2, e1);
+        vec3 b = cross(e2, s);
+        vec3 c = cross(s, e1);
+        vec4 det = vec4(dot(d00, a), dot(d10, a), dot(d01, a), dot(d11, a));
+        float sigma = det.x > 0.0 ? 1.0 : -1.0;
+        vec4 ad = det * sigma;  // |det| where the corners agree in sign
+        vec4 u = vec4(dot(d00, b), dot(d10, b), dot(d01, b), dot(d11, b)) * sigma;
+        vec4 v = vec4(dot(d00, c), dot(d10, c), dot(d01, c), dot(d11, c)) * sigma;
+        vec4 w = ad - u - v;
+        bool agree = all(greaterThan(ad, vec4(1e-30)));
+        bool ahead = sigma * dot(e2, c) > 0.0;
+        bool missed = agree && (!ahead || all(lessThan(u, vec4(0.0)))
+            || all(lessThan(v, vec4(0.0))) || all(lessThan(w, vec4(0.0))));
+        if (!missed) {
+            candidates++;
+            covered = agree && ahead && all(greaterThan(u, vec4(0.0)))
+                && all(greaterThan(v, vec4(0.0))) && all(greaterThan(w, vec4(0.0)));
+            covered_ke = sigma > 0.0 ? tri.ke.rgb : vec3(0.0);
+        }
+    }
+    if (candidates == 0u) {
+        return vec3(0.0);
+    }
+    if (candidates == 1u && covered && kind[0] == 1u && kind[1] == 1u && kind[2] == 1u
+        && kind[3] == 1u) {
+        return covered_ke;
+    }
     vec3 sum = vec3(0.0);
     for (uint j = 0u; j < e; j++) {
         for (uint i = 0u; i < e; i++) {
-            vec2 fb = vec2(px) + (vec2(i, j) + 0.5) / float(e);
-            vec4 w = inv * vec4(fb / size * 2.0 - 1.0, 0.0, 1.0);
-            vec3 d = normalize(w.xyz / w.w - eye);
+            vec3 d = ar_pixel_ray(inv, vec2(px) + (vec2(i, j) + 0.5) / float(e), size, eye);
             float best = 3.0e38;
             bool front = false;
             vec3 ke = vec3(0.0);
