@@ -158,15 +158,8 @@ impl EmitterTriangles {
         py: u32,
         quadrant: impl Fn(usize, usize) -> SampleHit,
     ) -> DVec3 {
-        let (x, y) = (px as f64, py as f64);
-        let corners = [
-            ray(x, y),
-            ray(x + 1.0, y),
-            ray(x, y + 1.0),
-            ray(x + 1.0, y + 1.0),
-        ];
         let open = || (0..4).all(|k| quadrant(k % 2, k / 2) == SampleHit::Emitter);
-        match self.decided(eye, corners) {
+        match self.decided(eye, corner_rays(&ray, px, py)) {
             Some(ke) if ke == DVec3::ZERO || open() => return ke,
             _ => {}
         }
@@ -202,6 +195,18 @@ impl EmitterTriangles {
         }
         sum / (e * e) as f64
     }
+}
+
+/// The camera rays through the 4 corners of pixel `(px, py)` (`ray` as
+/// [`EmitterTriangles::edge_emission`]'s), in the order [`EmitterTriangles::decided`] takes.
+fn corner_rays(ray: &impl Fn(f64, f64) -> DVec3, px: u32, py: u32) -> [DVec3; 4] {
+    let (x, y) = (px as f64, py as f64);
+    [
+        ray(x, y),
+        ray(x + 1.0, y),
+        ray(x, y + 1.0),
+        ray(x + 1.0, y + 1.0),
+    ]
 }
 
 #[cfg(test)]
@@ -243,14 +248,7 @@ mod tests {
                         let b = t.sub_ray_emission(eye, ray, px, py, |_, _| hit);
                         assert!((a - b).abs().max_element() < 1e-12, "({px}, {py}): {a} {b}");
                     }
-                    let (x, y) = (px as f64, py as f64);
-                    let c = [
-                        ray(x, y),
-                        ray(x + 1.0, y),
-                        ray(x, y + 1.0),
-                        ray(x + 1.0, y + 1.0),
-                    ];
-                    settled += t.decided(eye, c).is_some() as usize;
+                    settled += t.decided(eye, corner_rays(&ray, px, py)).is_some() as usize;
                     total += 1;
                 }
             }
