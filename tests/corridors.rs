@@ -494,8 +494,7 @@ fn a_stack_of_plates_with_offset_openings() {
 /// 7.7–25.8%). Bounds about 1.5×.
 #[test]
 fn direct_light_against_a_converged_reference() {
-    use antiradiance::reference::{render_reference, ReferenceOptions};
-    let silent = &antiradiance::progress::Silent;
+    use antiradiance::reference::ReferenceOptions;
     // Worst over all pixels and over one-surface pixels, under the sun and from the lamp.
     let (mut sun, mut lamp): ((f64, f64), (f64, f64)) = ((0.0, 0.0), (0.0, 0.0));
     let mut cases = Vec::new();
@@ -510,16 +509,14 @@ fn direct_light_against_a_converged_reference() {
     for (walls, turns, lit) in cases {
         let scene = serpentine(turns, walls, lit);
         let key = format!("{walls:?}-{lit:?}-{turns}");
-        let fine = render_reference(
+        let fine = reference(
             &scene,
             &ReferenceOptions {
                 spp: 32768,
                 max_bounces: Some(1),
                 seed: 79,
             },
-            silent,
-        )
-        .unwrap();
+        );
         let (w, h) = (scene.camera.width, scene.camera.height);
         let all = vec![true; (w * h) as usize];
         let inside = one_surface(&scene, w, h);

@@ -15,7 +15,7 @@ use glam::DVec3;
 use integrator::Tracer;
 use rayon::prelude::*;
 use sampling::Rng;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
@@ -41,7 +41,7 @@ impl Default for ReferenceOptions {
 }
 
 /// Convergence figures of a reference render.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct ReferenceStats {
     /// Samples per pixel.
     pub spp: u32,

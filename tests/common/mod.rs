@@ -7,8 +7,11 @@ use glam::DVec3;
 use std::sync::{Arc, OnceLock};
 
 mod figures;
+mod stored;
 #[allow(unused_imports)]
 pub use figures::{measurements_dir, record};
+#[allow(unused_imports)]
+pub use stored::reference;
 
 /// One headless Vulkan context per test binary, validation on (lavapipe in CI): a validation
 /// message fails the test that reads it.
@@ -255,16 +258,14 @@ pub fn path_traced(scene: &Scene, spp: u32) -> Truth {
     use antiradiance::reference::{render_reference, ReferenceOptions};
     let silent = &antiradiance::progress::Silent;
     let t = std::time::Instant::now();
-    let reference = render_reference(
+    let reference = stored::reference(
         scene,
         &ReferenceOptions {
             spp,
             max_bounces: None,
             seed: 21,
         },
-        silent,
-    )
-    .unwrap();
+    );
     let seen = render_reference(
         scene,
         &ReferenceOptions {
