@@ -12,8 +12,10 @@ use antiradiance::scene::{load_scene, Light, Material, Precision, Scene};
 use antiradiance::BackendKind as Backend;
 use common::*;
 use glam::DVec3;
+use std::collections::HashMap;
 use std::f64::consts::PI;
 use std::path::Path;
+use std::sync::{Arc, Mutex, OnceLock};
 
 fn run(scene: &Scene, backend: Backend, shadow: u32) -> Rendered {
     let options = Options {
@@ -600,6 +602,44 @@ fn direct_light_per_block_stays_within_0_005_of_per_pixel() {
     );
 }
 
+/// A bundled scene at its own size (bins 32, 3 iterations) with the frame's settings that
+/// `set` chose, rendered once per binary: the three tests below share 4 of their 6
+/// configurations (the default, and blocks of one pixel), which would otherwise be drawn twice.
+fn shared_render(name: &str, s: &Scene, backend: Backend) -> Arc<Image> {
+    type Renders = Mutex<HashMap<String, Arc<OnceLock<Arc<Image>>>>>;
+    static RENDERS: OnceLock<Renders> = OnceLock::new();
+    let (w, h) = (s.camera.width as u64, s.camera.height as u64);
+    // All three scenes are drawn in blocks of 2 by default: `None` is `Some(2)` here.
+    assert!(w * h >= antiradiance::frame::direct::MIN_BLOCK_PIXELS);
+    let v = &s.solver;
+    let key = format!(
+        "{name} {backend:?} {} {} {}",
+        v.direct_per_sample,
+        v.direct_block.unwrap_or(2),
+        v.splat_per_sample
+    );
+    let cell = RENDERS
+        .get_or_init(Default::default)
+        .lock()
+        .unwrap()
+        .entry(key)
+        .or_default()
+        .clone();
+    cell.get_or_init(|| {
+        let options = Options {
+            backend,
+            solver: antiradiance::engine::SolverOverrides {
+                bins: Some(32),
+                iterations: Some(3),
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        Arc::new(render_checked(name, s, options).image)
+    })
+    .clone()
+}
+
 /// Each bundled scene at its own size on both backends (bins 32, 3 iterations), rendered with
 /// `set(scene, false)` and `set(scene, true)`: their relative RMSE lies within `bounds`.
 fn per_pixel_against_per_sample(what: &str, set: fn(&mut Scene, bool), bounds: (f64, f64)) {
@@ -609,16 +649,7 @@ fn per_pixel_against_per_sample(what: &str, set: fn(&mut Scene, bool), bounds: (
         for backend in [Backend::Cpu, Backend::Gpu] {
             let mut image = |per_sample: bool| {
                 set(&mut s, per_sample);
-                let options = Options {
-                    backend,
-                    solver: antiradiance::engine::SolverOverrides {
-                        bins: Some(32),
-                        iterations: Some(3),
-                        ..Default::default()
-                    },
-                    ..Default::default()
-                };
-                render_checked(name, &s, options).image
+                shared_render(name, &s, backend)
             };
             let (per_pixel, per_sample) = (image(false), image(true));
             let (e, _) = antiradiance::metrics::relative_errors(&per_pixel, &per_sample).unwrap();
