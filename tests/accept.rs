@@ -33,9 +33,10 @@ fn every_scene_renders_a_finite_lit_image() {
         .collect();
     scenes.sort();
     assert!(scenes.len() >= 8, "only {} scenes", scenes.len());
+    let dir = common::Scratch::new("accept");
     for scene in &scenes {
         let name = scene.file_name().unwrap().to_string_lossy().into_owned();
-        let exr = std::env::temp_dir().join(format!("accept-{}-{name}.exr", std::process::id()));
+        let exr = dir.join(format!("{name}.exr"));
         let json = exr.with_extension("json");
         let out = std::process::Command::new(env!("CARGO_BIN_EXE_antiradiance"))
             .env("ANTIRADIANCE_VALIDATION", "1")

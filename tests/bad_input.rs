@@ -1,12 +1,12 @@
 //! Bad scene input returns a clear error naming the file, never a panic.
 
+mod common;
+
 use antiradiance::scene::load_scene;
 use std::path::{Path, PathBuf};
 
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("antiradiance-bad-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn dir(name: &str) -> common::Scratch {
+    common::Scratch::new(&format!("bad-{name}"))
 }
 
 fn write(d: &Path, name: &str, text: &str) -> PathBuf {

@@ -2,6 +2,8 @@
 //! line with an exact exit status, and a failed run leaves no output behind. GPU runs have the
 //! validation layer on (`ANTIRADIANCE_VALIDATION=1`), so a validation message is visible here.
 
+mod common;
+
 use antiradiance::frame::Image;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -12,11 +14,8 @@ fn bin() -> Command {
     c
 }
 
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("antiradiance-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn scratch(name: &str) -> common::Scratch {
+    common::Scratch::new(&format!("cli-{name}"))
 }
 
 fn scene() -> PathBuf {
@@ -489,8 +488,7 @@ fn cli_reports_passes_and_target_error() {
         .iter()
         .any(|v| v == "antiradiance"));
     assert!(all["memory_bytes"]["tables"].as_u64() > info["memory_bytes"]["tables"].as_u64());
-    let dir = std::env::temp_dir().join(format!("ar-adaptive-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("adaptive");
     let stats = dir.join("stats.json");
     let (stats_path, exr) = (stats.to_str().unwrap(), dir.join("out.exr"));
     let (_, stderr) = run(&[

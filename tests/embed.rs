@@ -4,6 +4,8 @@
 //! message fails the example). Its last frame must be the scene: finite, lit, the red wall red
 //! and the green wall green.
 
+mod common;
+
 use antiradiance::frame::Image;
 use std::path::PathBuf;
 use std::process::Command;
@@ -26,8 +28,7 @@ fn example() -> PathBuf {
 
 #[test]
 fn embedding_example_runs_clean_and_draws_the_scene() {
-    let dir = std::env::temp_dir().join(format!("antiradiance-embed-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::Scratch::new("embed");
     let exr = dir.join("last.exr");
     let o = Command::new(example())
         .args(["--frames", "3", "--exr", exr.to_str().unwrap()])

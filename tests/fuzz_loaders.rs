@@ -3,6 +3,8 @@
 //! short, tokens spliced in), must load to a valid scene or an error, never panic or hang.
 //! Bounded cases, fixed seeds (proptest's default deterministic runner for the CI).
 
+mod common;
+
 use antiradiance::scene::load_scene;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
@@ -99,8 +101,7 @@ fn loads_or_refuses(path: &Path) -> Result<bool, String> {
 
 /// Mutates `target` (a file the scene `entry` reads; `entry` itself when equal) `cases` times.
 fn fuzz(name: &str, files: &[(&str, Vec<u8>)], target: usize, cases: u32) {
-    let dir = std::env::temp_dir().join(format!("antiradiance-fuzz-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::Scratch::new(&format!("fuzz-{name}"));
     for (f, bytes) in files {
         std::fs::write(dir.join(f), bytes).unwrap();
     }

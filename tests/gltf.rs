@@ -2,6 +2,8 @@
 //! mirrored nodes keep their front, light units convert by 1/683, a Cornell box written as glTF
 //! renders the image of its OBJ, and every malformed-file class is one clear error.
 
+mod common;
+
 use antiradiance::scene::{load_scene, Light, Scene};
 use antiradiance::{BackendKind, Options};
 use base64::Engine as _;
@@ -16,10 +18,8 @@ fn sample(rel: &str) -> PathBuf {
     Path::new(SAMPLES).join(rel)
 }
 
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("antiradiance-gltf-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn dir(name: &str) -> common::Scratch {
+    common::Scratch::new(&format!("gltf-{name}"))
 }
 
 /// One buffer (a data URI) holding `positions`, then `normals`, then u32 `indices`, with the

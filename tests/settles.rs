@@ -201,8 +201,7 @@ fn a_deep_stack_of_boards_settles_damped() {
 #[test]
 fn a_scene_file_without_a_count_iterates_to_the_default_tolerance() {
     use antiradiance::scene::{load_scene, DEFAULT_ITERATION_CAP, DEFAULT_TOLERANCE};
-    let dir = std::env::temp_dir().join(format!("antiradiance-settles-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("settles");
     // Eight corners (1 + x + 2y + 4z), six quads wound to face into the box.
     let mut obj = String::from("mtllib box.mtl\nusemtl wall\n");
     for z in 0..2 {

@@ -103,12 +103,8 @@ fn light_travel() -> DVec3 {
 
 /// Writes the sphere scene (OBJ, MTL and TOML) into a folder of its own and returns the TOML's
 /// path. `object` is extra TOML for the `[[object]]` (a transform, keyframes).
-fn write_scene(name: &str, normals: Normals, object: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!(
-        "antiradiance-shading-{name}-{}",
-        std::process::id()
-    ));
-    std::fs::create_dir_all(&dir).unwrap();
+fn write_scene(name: &str, normals: Normals, object: &str) -> (Scratch, PathBuf) {
+    let dir = Scratch::new(&format!("shading-{name}"));
     std::fs::write(
         dir.join("sphere.obj"),
         format!("mtllib sphere.mtl\nusemtl grey\n{}", sphere_obj(normals)),
@@ -129,11 +125,11 @@ fn write_scene(name: &str, normals: Normals, object: &str) -> PathBuf {
     );
     let path = dir.join("sphere.toml");
     std::fs::write(&path, toml).unwrap();
-    path
+    (dir, path)
 }
 
 fn load(name: &str, normals: Normals) -> Scene {
-    let path = write_scene(name, normals, "");
+    let (_dir, path) = write_scene(name, normals, "");
     load_scene(&path).unwrap_or_else(|e| panic!("{name}: {e}"))
 }
 
@@ -305,7 +301,7 @@ fn check_normals(s: &Scene, what: &str, want: impl Fn(DVec3) -> DVec3) {
 #[test]
 fn normals_follow_the_transform_and_the_keyframes() {
     let c = DVec3::new(0.5, -0.25, 0.1);
-    let path = write_scene(
+    let (_dir, path) = write_scene(
         "scaled",
         Normals::Exact,
         &format!(
@@ -324,7 +320,7 @@ translate = [{}, {}, {}]
     let keys = "[[object.keyframe]]\ntime = 0.0\ntranslate = [0.0, 0.0, 0.0]\n\
                 [[object.keyframe]]\ntime = 1.0\ntranslate = [0.4, 0.2, 0.0]\n\
                 rotate = { axis = [0, 0, 1], angle_deg = 60 }\n";
-    let s = load_scene(&write_scene("moving", Normals::Exact, keys)).unwrap();
+    let s = load_scene(&write_scene("moving", Normals::Exact, keys).1).unwrap();
     for t in [0.0, 0.5, 1.0] {
         let at = s.at(t);
         // A rigid motion: the normals stay radial about the moved center (the vertices' mean

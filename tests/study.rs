@@ -67,9 +67,8 @@ fn tiny_study_writes_csv_and_plots() {
         image: r.image,
         direct: Some(r.direct),
     };
-    let dir = std::env::temp_dir().join(format!("antiradiance-study-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    let mut o = StudyOptions::defaults(&s, dir.clone());
+    let dir = Scratch::new("study");
+    let mut o = StudyOptions::defaults(&s, dir.to_path_buf());
     o.iterations = 2;
     o.bins = vec![32, 64];
     o.element_sizes = vec![0.25];
@@ -176,9 +175,8 @@ fn dynamic_study_writes_its_rows_reuses_its_references_and_measures_as_compare()
         &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box-moving.toml"),
     )
     .unwrap();
-    let out = std::env::temp_dir().join(format!("antiradiance-dynamic-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&out);
-    let mut o = DynamicOptions::defaults(out.clone(), 3, 4.0);
+    let out = Scratch::new("dynamic");
+    let mut o = DynamicOptions::defaults(out.to_path_buf(), 3, 4.0);
     o.reference_spp = 16;
     o.iterations_per_frame = vec![1, 2];
     o.spp = vec![1];

@@ -1,12 +1,13 @@
 //! `profile --trace` (issue 33 item 5): the file is a Chrome trace-event document with a device
 //! track holding every timed pass and a host track, and its pass durations are the table's.
 
+mod common;
+
 use serde_json::Value;
 
 #[test]
 fn trace_parses_and_its_passes_are_the_tables() {
-    let d = std::env::temp_dir().join(format!("antiradiance-trace-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
+    let d = common::Scratch::new("trace");
     let (trace, json) = (d.join("trace.json"), d.join("profile.json"));
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_antiradiance"))
         .args([

@@ -13,6 +13,47 @@ pub use figures::{measurements_dir, record};
 #[allow(unused_imports)]
 pub use stored::reference;
 
+/// A folder for one test's files under the system's temporary directory
+/// (`antiradiance-NAME-PID`), emptied when made and removed when dropped, unless the test is
+/// failing: then it is left to look at.
+pub struct Scratch(std::path::PathBuf);
+
+impl Scratch {
+    pub fn new(name: &str) -> Self {
+        let d = std::env::temp_dir().join(format!("antiradiance-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        Self(d)
+    }
+}
+
+impl std::ops::Deref for Scratch {
+    type Target = std::path::Path;
+    fn deref(&self) -> &std::path::Path {
+        &self.0
+    }
+}
+
+impl AsRef<std::path::Path> for Scratch {
+    fn as_ref(&self) -> &std::path::Path {
+        &self.0
+    }
+}
+
+impl AsRef<std::ffi::OsStr> for Scratch {
+    fn as_ref(&self) -> &std::ffi::OsStr {
+        self.0.as_os_str()
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        if !std::thread::panicking() {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
+}
+
 /// One headless Vulkan context per test binary, validation on (lavapipe in CI): a validation
 /// message fails the test that reads it.
 pub fn context() -> Arc<Context> {
