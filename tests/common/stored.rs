@@ -8,7 +8,8 @@
 //! at 1/32 of the samples (another seed) must agree with it within the two images' noise, so a
 //! changed path tracer fails the test instead of being measured against an old answer.
 //! A missing one is rendered in full (and written when `ANTIRADIANCE_RECORD_REFERENCES=1`):
-//! `ANTIRADIANCE_RECORD_REFERENCES=1 cargo test --release` refreshes them all.
+//! `ANTIRADIANCE_RECORD_REFERENCES=1 cargo test --release` refreshes them all; it does not remove
+//! the files of scenes no test renders any more (empty the folder first to prune them).
 
 use antiradiance::frame::Image;
 use antiradiance::reference::{render_reference, Reference, ReferenceOptions, ReferenceStats};
