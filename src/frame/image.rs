@@ -381,6 +381,7 @@ mod tests {
             .to_string();
         assert!(e.contains("a.unknown"), "{e}");
         assert_eq!(entries(&d), ["a.exr", "a.png"]);
+        std::fs::remove_dir_all(&d).unwrap();
     }
 
     #[test]
@@ -405,6 +406,7 @@ mod tests {
         );
         #[cfg(unix)]
         assert!(e(Path::new("/dev/null")).contains("not a regular file"));
+        std::fs::remove_dir_all(&d).unwrap();
     }
 
     #[test]
@@ -424,5 +426,6 @@ mod tests {
             e,
             "test.exr: pixel (1, 1) is [2.0, inf, 0.25], not finite (2 non-finite pixels)"
         );
+        std::fs::remove_dir_all(&d).unwrap();
     }
 }

@@ -186,5 +186,6 @@ mod tests {
         );
         std::fs::write(d.join("ok.obj"), "v 0 0 0\r\n").unwrap();
         assert_eq!(read_text(&d.join("ok.obj"), "OBJ").unwrap(), "v 0 0 0\r\n");
+        std::fs::remove_dir_all(&d).unwrap();
     }
 }
