@@ -172,6 +172,34 @@ pub fn render_checked(
     scene: &antiradiance::Scene,
     options: antiradiance::Options,
 ) -> antiradiance::engine::Rendered {
+    checked_render(name, options, |options| {
+        antiradiance::engine::render(scene, options, &antiradiance::progress::Silent)
+    })
+}
+
+/// [`render_checked`] of a scene already prepared: renders that differ only in what a
+/// [`antiradiance::engine::Prepared`] carries after linking (the iteration count, the plan's
+/// features, the backend) share one linking.
+pub fn render_prepared(
+    name: &str,
+    prep: antiradiance::engine::Prepared,
+    options: antiradiance::Options,
+) -> antiradiance::engine::Rendered {
+    checked_render(name, options, |options| {
+        let silent = &antiradiance::progress::Silent;
+        antiradiance::Engine::from_prepared(prep, options, silent)?.render(silent)
+    })
+}
+
+/// Runs `render` with `options` on the shared context (GPU) and float16 accumulation where the
+/// environment forces it, then applies [`render_checked`]'s checks.
+fn checked_render(
+    name: &str,
+    options: antiradiance::Options,
+    render: impl FnOnce(
+        &antiradiance::Options,
+    ) -> antiradiance::error::Result<antiradiance::engine::Rendered>,
+) -> antiradiance::engine::Rendered {
     let gpu = options.backend == antiradiance::BackendKind::Gpu;
     let ctx = gpu.then(context);
     let options = antiradiance::Options {
@@ -184,8 +212,7 @@ pub fn render_checked(
         ..options
     };
     let backend = options.backend;
-    let r = antiradiance::engine::render(scene, &options, &antiradiance::progress::Silent)
-        .unwrap_or_else(|e| panic!("{name} {backend}: {e}"));
+    let r = render(&options).unwrap_or_else(|e| panic!("{name} {backend}: {e}"));
     if let Some(ctx) = &ctx {
         assert_clean(ctx);
     }
