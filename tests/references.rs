@@ -60,11 +60,14 @@ fn check(
     let memory = Some(context().info.device_local_bytes);
     let prep = Prepared::new(scene, &Options::backend(Backend::Cpu), memory, silent)
         .unwrap_or_else(|e| panic!("{name}: {e}"));
-    // `--iterations 0`: what `SolverOverrides { iterations: Some(0) }` resolves to.
+    // `--iterations 0` applied to the prepared settings, as `Options::resolve` applies it.
     let direct_only = || {
         let mut p = prep.clone();
-        p.settings.iterations = 0;
-        p.settings.tolerance = None;
+        p.settings = antiradiance::engine::SolverOverrides {
+            iterations: Some(0),
+            ..Default::default()
+        }
+        .apply(&p.settings);
         p
     };
     let mut renders = Vec::new();
