@@ -12,9 +12,12 @@ use crate::meshed::Meshed;
 use crate::plan::target::TargetChoice;
 use crate::plan::Plan;
 use crate::progress::Progress;
+use crate::raycast::RayCaster;
 use crate::scene::{Camera, Light, Scene, SolverSettings};
 use crate::settings::Method;
+use crate::solver::Table;
 use crate::system::System;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// A scene prepared for solving.
@@ -45,6 +48,10 @@ pub struct Prepared {
     pub maps: ShadowMaps,
     /// Departures from the requested configuration made while preparing.
     pub fallbacks: Vec<String>,
+    /// The environment's shadowed incident radiance and the radiance it was cast for
+    /// ([`Self::sky`]): kept where only lights move ([`Self::relit`]), cast anew where the
+    /// geometry does.
+    sky: Option<(glam::DVec3, Arc<Table>)>,
 }
 
 impl Prepared {
@@ -120,7 +127,7 @@ impl Prepared {
     /// this one's): the system, links and surfaces are kept, the lights, plan and shadow-map
     /// views made anew.
     pub fn relit(&self, scene: &Scene, options: &Options) -> Result<Self> {
-        Self::lit(
+        let mut p = Self::lit(
             scene,
             options,
             self.settings.clone(),
@@ -128,7 +135,10 @@ impl Prepared {
             self.target.clone(),
             self.system.clone(),
             self.surfaces.clone(),
-        )
+        )?;
+        // The same geometry: the sky's rays would meet what they met.
+        p.sky = self.sky.clone();
+        Ok(p)
     }
 
     /// This prepared scene with its objects where `scene` has them, along its bounded link
@@ -238,7 +248,42 @@ impl Prepared {
             plan,
             maps,
             fallbacks,
+            sky: None,
         })
+    }
+
+    /// The sky [`Self::sky`] has cast for this geometry, if it has.
+    pub fn sky_cast(&self) -> Option<&Arc<Table>> {
+        self.sky.as_ref().map(|(_, t)| t)
+    }
+
+    /// The constant environment's incident radiance per leaf and bin, shadowed by rays
+    /// ([`crate::frame::environment::environment_in_table`]), or `None` without one. Cast once
+    /// for this geometry and environment (with `caster` where the caller has one, else a new
+    /// one), then shared: a moved light or a copy of this prepared scene does not cast again
+    /// (the breakfast room's sky is 5 s of rays).
+    pub fn sky(&mut self, caster: Option<&RayCaster>) -> Option<Arc<Table>> {
+        let env = self.scene.environment;
+        if env == glam::DVec3::ZERO {
+            return None;
+        }
+        if let Some((e, t)) = &self.sky {
+            if *e == env {
+                return Some(t.clone());
+            }
+        }
+        let owned;
+        let caster = match caster {
+            Some(c) => c,
+            None => {
+                owned = RayCaster::new(&self.system);
+                &owned
+            }
+        };
+        let t =
+            Arc::new(crate::frame::environment::environment_in_table(&self.system, env, caster).0);
+        self.sky = Some((env, t.clone()));
+        Some(t)
     }
 
     /// Re-plans and re-fits the shadow maps after a method added lights (instant radiosity's

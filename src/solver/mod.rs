@@ -16,6 +16,7 @@ pub mod push;
 use crate::scene::Scheme;
 use crate::system::System;
 use glam::DVec3;
+use std::sync::Arc;
 
 /// A table with one row per node and one RGB texel per bin (the layout of §4.1).
 #[derive(Debug, Clone, PartialEq)]
@@ -83,7 +84,7 @@ pub struct CpuState {
     /// Incident environment radiance per leaf and bin, shadowed
     /// ([`crate::frame::environment::environment_in_table`]): reflected, creating no
     /// antiradiance; set with [`CpuState::set_environment_in`].
-    environment_in: Option<Table>,
+    environment_in: Option<Arc<Table>>,
     /// Its first bounce ([`local::direct_exitant`]), which the local pass adds to I_ex and
     /// I_total (the frame draws no environment light per pixel).
     environment_ex: Option<Table>,
@@ -116,7 +117,7 @@ impl CpuState {
 
     /// Sets the shadowed environment's incident table (or none) and computes its first bounce
     /// once, as [`CpuState::set_direct_in`] does for direct light.
-    pub fn set_environment_in(&mut self, sys: &System, environment: Option<Table>) {
+    pub fn set_environment_in(&mut self, sys: &System, environment: Option<Arc<Table>>) {
         self.environment_ex = environment.as_ref().map(|t| local::direct_exitant(sys, t));
         self.environment_in = environment;
     }
@@ -199,7 +200,7 @@ impl<'a> CpuSolver<'a> {
     /// ([`crate::frame::environment::environment_in_table`]): reflected, no antiradiance (§3.3).
     pub fn set_environment(&mut self, table: Option<Table>) {
         let sys = self.sys;
-        self.state.set_environment_in(sys, table);
+        self.state.set_environment_in(sys, table.map(Arc::new));
     }
 
     /// Hook for direct light (§3.3): `f(leaf_index, bin)` returns the incident radiance from
@@ -294,7 +295,7 @@ impl<'a> CpuSolver<'a> {
             let cos = -c.dot(leaf.normal);
             if cos > 0.0 {
                 let mut l = self.l_push.row(n)[b];
-                for t in [&self.direct_in, &self.environment_in]
+                for t in [self.direct_in.as_ref(), self.environment_in.as_deref()]
                     .into_iter()
                     .flatten()
                 {

@@ -78,8 +78,7 @@ impl Solve for CpuBackend {
         state.set_direct_in(&prep.system, direct);
         self.time("direct", t);
         let t = Instant::now();
-        let sky =
-            crate::frame::environment::shadowed(&prep.system, prep.scene.environment, &self.caster);
+        let sky = prep.sky(Some(&self.caster));
         let state = self.state.as_mut().expect("state present");
         state.set_environment_in(&prep.system, sky);
         self.time("environment", t);

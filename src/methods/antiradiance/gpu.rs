@@ -57,7 +57,7 @@ pub struct GpuBackend {
     direct: Option<Table>,
     /// The environment's shadowed incident table of the last light preparation (kept for a
     /// solver made anew at another precision, [`Solve::widen`]).
-    sky: Option<Table>,
+    sky: Option<std::sync::Arc<Table>>,
     tuning: GpuTuning,
     pending: Vec<(String, f64)>,
     /// After a follow that left every shadow view as it was: the maps' distances, reused
@@ -124,7 +124,7 @@ impl GpuBackend {
     fn set_sources(&mut self, prep: &Prepared) -> Result<()> {
         let env = prep.scene.environment;
         self.solver
-            .set_environment(&prep.system, env, self.sky.as_ref())?;
+            .set_environment(&prep.system, env, self.sky.as_deref())?;
         if let Some(d) = &self.direct {
             self.solver.set_direct(&prep.system, d)?;
         }
@@ -255,13 +255,10 @@ impl Solve for GpuBackend {
     }
     fn prepare_lights(&mut self, prep: &mut Prepared) -> Result<()> {
         self.direct = None;
-        // The sky's rays once per light preparation (the geometry may have moved).
-        let env = prep.scene.environment;
-        self.sky = None;
-        if env != glam::DVec3::ZERO {
-            let t = std::time::Instant::now();
-            let caster = crate::raycast::RayCaster::new(&prep.system);
-            self.sky = crate::frame::environment::shadowed(&prep.system, env, &caster);
+        // The sky's rays once per geometry (`Prepared::sky`: kept where only lights moved).
+        let t = std::time::Instant::now();
+        self.sky = prep.sky(None);
+        if self.sky.is_some() {
             self.pending
                 .push(("environment".into(), t.elapsed().as_secs_f64() * 1e3));
         }
