@@ -89,6 +89,10 @@ const float AR_PI = 3.14159265358979;
 #define AR_FRAME_GBUF_NORMAL 13
 #define AR_FRAME_SPLAT_BINS 14
 #define AR_FRAME_DIRECT_BLOCKS 15
+#define AR_FRAME_VERTEX_POSITIONS 16
+#define AR_FRAME_VERTEX_VALUES 17
+// Texels per row of the vertex values (src/gpu/passes/vertex_values.rs WIDTH).
+#define AR_VERTEX_VALUES_WIDTH 1024
 
 layout(push_constant) uniform FrameConstants {
     mat4 view_proj;   // camera, or the shadow view being drawn

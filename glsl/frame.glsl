@@ -22,6 +22,8 @@ layout(binding = AR_FRAME_GBUF_NORMAL) uniform sampler2D gbuf_normal;
 layout(binding = AR_FRAME_SPLAT) uniform sampler2D splat_sum;
 layout(binding = AR_FRAME_SPLAT_BINS) uniform sampler2D splat_bins;
 layout(binding = AR_FRAME_DIRECT_BLOCKS) uniform sampler2D direct_blocks;
+layout(std430, binding = AR_FRAME_VERTEX_POSITIONS) readonly buffer VertexPositions { vec4 vertex_positions[]; };
+layout(binding = AR_FRAME_VERTEX_VALUES) uniform sampler2D vertex_values;
 layout(std430, binding = AR_FRAME_EMITTERS) readonly buffer Emitters { EmitterTriangle emitter_tris[]; };
 
 const float AR_SHADOW_DEPTH_BIAS = 0.1;

@@ -101,7 +101,7 @@ impl Prepared {
             &self.camera,
             &plan.features,
             &self.maps,
-            self.surfaces.splat_per_sample,
+            &self.surfaces,
             crate::frame::direct::block_for(
                 self.surfaces.direct_block,
                 &self.shared_lights,

@@ -46,6 +46,8 @@ struct FramePasses {
     /// full-screen compose and 2×2 resolve.
     direct_blocks: passes::direct_blocks::DirectBlocks,
     compose: passes::compose::Compose,
+    /// The shared vertices' values, before the G-buffer reads them.
+    vertex_values: passes::vertex_values::VertexValues,
 }
 
 /// The frame's buffer records, packed on the CPU ([`super::pack`]).
@@ -60,6 +62,7 @@ struct FrameData {
     lights: Vec<super::layout::GpuLight>,
     shadow_views: Vec<super::layout::GpuShadowView>,
     emitters: Vec<super::layout::GpuEmitterTriangle>,
+    vertex_positions: Vec<[f32; 4]>,
 }
 
 impl FrameData {
@@ -74,10 +77,14 @@ impl FrameData {
             ..
         } = *f;
         // Shared-vertex adjacency only where smooth meshes are interpolated.
-        let (adj_offsets, adj_list) = if f.vertex {
-            (surf.adjacency_offsets.clone(), pack::adjacency(surf))
+        let (adj_offsets, adj_list, vertex_positions) = if f.vertex {
+            (
+                surf.adjacency_offsets.clone(),
+                pack::adjacency(surf),
+                pack::vertex_positions(surf),
+            )
         } else {
-            (Vec::new(), Vec::new())
+            (Vec::new(), Vec::new(), Vec::new())
         };
         // Storage buffers may not be empty: pad with one unused record.
         Self {
@@ -91,6 +98,7 @@ impl FrameData {
             lights: pack::padded(pack::lights(lights, maps)),
             shadow_views: pack::padded(pack::shadow_views(maps)),
             emitters: pack::padded(pack::emitter_triangles(&EmitterTriangles::new(scene))),
+            vertex_positions: pack::padded(vertex_positions),
         }
     }
 
@@ -109,6 +117,11 @@ impl FrameData {
             lights: ("lights", as_bytes(&self.lights), sb),
             shadow_views: ("shadow views", as_bytes(&self.shadow_views), sb),
             emitters: ("emitting triangles", as_bytes(&self.emitters), sb),
+            vertex_positions: (
+                "shared-vertex positions",
+                as_bytes(&self.vertex_positions),
+                sb,
+            ),
         }
     }
 
@@ -188,13 +201,14 @@ pub struct GpuFrame {
 
 impl GpuFrame {
     /// The frame's images for `camera` and `maps` under `features`, as data (what `info`
-    /// reports as `frame_images` and `shadow_maps`); `splat_per_sample`: `Surfaces`' setting;
-    /// `direct_block`: the blocks sharing the direct light ([`crate::frame::direct::block_for`]).
+    /// reports as `frame_images` and `shadow_maps`); from `surf` its splat setting and shared
+    /// vertices; `direct_block`: the blocks sharing the direct light
+    /// ([`crate::frame::direct::block_for`]).
     pub fn describe(
         camera: &Camera,
         features: &Features,
         maps: &ShadowMaps,
-        splat_per_sample: bool,
+        surf: &Surfaces,
         direct_block: u32,
     ) -> FrameImages<ImageDesc> {
         FrameImages::describe(
@@ -202,8 +216,9 @@ impl GpuFrame {
             camera.height,
             features,
             maps.atlas,
-            splat_per_sample,
+            surf.splat_per_sample,
             direct_block,
+            surf.vertices.len(),
         )
     }
 
@@ -212,10 +227,10 @@ impl GpuFrame {
         camera: &Camera,
         features: &Features,
         maps: &ShadowMaps,
-        splat_per_sample: bool,
+        surf: &Surfaces,
         direct_block: u32,
     ) -> MemoryReport {
-        let images = Self::describe(camera, features, maps, splat_per_sample, direct_block);
+        let images = Self::describe(camera, features, maps, surf, direct_block);
         MemoryReport::default().images(images.iter())
     }
 
@@ -239,8 +254,8 @@ impl GpuFrame {
         let shared = shared_lights.0..shared_lights.1;
         let size = (camera.width, camera.height);
         let direct_block = crate::frame::direct::block_for(surf.direct_block, &shared, size);
-        let images = Self::describe(camera, features, maps, surf.splat_per_sample, direct_block)
-            .try_map(|d| d.create(c))?;
+        let images =
+            Self::describe(camera, features, maps, surf, direct_block).try_map(|d| d.create(c))?;
         let uploads_ms = t.elapsed().as_secs_f64() * 1e3;
         let t = std::time::Instant::now();
         let kinds = descriptor_kinds(fb::COUNT, &fb::BUFFERS);
@@ -267,6 +282,11 @@ impl GpuFrame {
                 &specialization,
             )?,
             compose: passes::compose::Compose::new(c, &layouts.pipeline, &specialization)?,
+            vertex_values: passes::vertex_values::VertexValues::new(
+                c,
+                &layouts.pipeline,
+                &specialization,
+            )?,
         };
         let setup = super::solver::SetupTimes {
             uploads_ms,
@@ -337,6 +357,9 @@ impl GpuFrame {
         if self.direct_block <= 1 {
             unused.push((&mut im.direct_blocks, 0.0));
         }
+        if !self.features.vertex {
+            unused.push((&mut im.vertex_values, 0.0));
+        }
         if unused.is_empty() {
             return Ok(());
         }
@@ -367,6 +390,7 @@ impl GpuFrame {
                     fb::GBUF_NORMAL => im.gbuf_normal.view,
                     fb::SPLAT_BINS => im.splat_bins.view,
                     fb::DIRECT_BLOCKS => im.direct_blocks.view,
+                    fb::VERTEX_VALUES => im.vertex_values.view,
                     _ => im.splat.view,
                 };
                 (b, view)
@@ -382,6 +406,7 @@ impl GpuFrame {
             (fb::LIGHTS, b.lights.raw),
             (fb::SHADOW_VIEWS, b.shadow_views.raw),
             (fb::EMITTERS, b.emitters.raw),
+            (fb::VERTEX_POSITIONS, b.vertex_positions.raw),
         ];
         pipelines::write_set(&self.ctx, self.set, self.sampler.raw(), &images, &buffers);
     }
@@ -457,6 +482,11 @@ impl GpuFrame {
             constants,
         };
         let (ps, images, prof) = (&self.passes, &mut self.images, &mut self.profiler);
+        if self.features.vertex {
+            prof.scope(&ctx, cmd, "vertex_values", || {
+                ps.vertex_values.record(&p, images)
+            });
+        }
         prof.scope(&ctx, cmd, "gbuffer", || {
             ps.gbuffer.record(&p, images, corners)
         });

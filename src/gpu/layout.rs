@@ -392,10 +392,16 @@ pub mod frame_binding {
     /// inverse depth of its samples' mean where that pixel shares it, else 0; sampled;
     /// `frame::direct`).
     pub const DIRECT_BLOCKS: u32 = 15;
+    /// Shared vertices' positions (storage, xyz).
+    pub const VERTEX_POSITIONS: u32 = 16;
+    /// Shared vertices' display radiance toward the eye (RGBA32F, vertex `v` at texel
+    /// `(v mod W, v / W)`, `W` = [`crate::gpu::passes::vertex_values::WIDTH`]; sampled).
+    pub const VERTEX_VALUES: u32 = 17;
     /// Number of bindings.
-    pub const COUNT: u32 = 16;
+    pub const COUNT: u32 = 18;
     /// Storage-buffer bindings (the rest are combined image samplers).
-    pub const BUFFERS: [u32; 8] = [
+    pub const BUFFERS: [u32; 9] = [
+        VERTEX_POSITIONS,
         EMITTERS,
         MATERIALS,
         BIN_CENTERS,

@@ -319,6 +319,14 @@ fn v3(v: DVec3) -> [f32; 3] {
     [v.x as f32, v.y as f32, v.z as f32]
 }
 
+/// The shared vertices' positions (xyz, w = 1), as the CPU's vertex values take them.
+pub fn vertex_positions(surf: &Surfaces) -> Vec<[f32; 4]> {
+    surf.vertices
+        .iter()
+        .map(|p| [p.x as f32, p.y as f32, p.z as f32, 1.0])
+        .collect()
+}
+
 /// The shared-vertex leaf lists with each leaf's shading normal at the vertex.
 pub fn adjacency(surf: &Surfaces) -> Vec<GpuAdjEntry> {
     surf.adjacency

@@ -25,7 +25,7 @@ impl GpuFrame {
         let block = crate::frame::direct::block_for(f.surf.direct_block, &shared, size);
         let same_images = *features == self.features
             && block == self.direct_block
-            && Self::describe(f.camera, features, maps, f.surf.splat_per_sample, block)
+            && Self::describe(f.camera, features, maps, f.surf, block)
                 .iter()
                 .zip(self.images.iter())
                 .all(|(d, im)| *d == im.desc);

@@ -172,6 +172,8 @@ fn frame_records_match_glsl() {
         "GBUF_NORMAL",
         "SPLAT_BINS",
         "DIRECT_BLOCKS",
+        "VERTEX_POSITIONS",
+        "VERTEX_VALUES",
     ];
     assert_eq!(names.len() as u32, frame_binding::COUNT);
     for (value, name) in names.iter().enumerate() {

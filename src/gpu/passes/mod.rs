@@ -16,6 +16,7 @@ pub mod push;
 pub mod shadow;
 pub mod splat;
 pub mod targets;
+pub mod vertex_values;
 
 use super::context::Context;
 use super::handle::Owned;

@@ -33,6 +33,9 @@ resource_set! {
         /// The area emitters' shared direct light at each block's corner pixel (`frame::direct`;
         /// 1×1 placeholder where no block is shared).
         pub direct_blocks,
+        /// The shared vertices' display radiance toward the eye, computed once per vertex
+        /// (`passes::vertex_values`; 1×1 placeholder without smooth meshes).
+        pub vertex_values,
         /// Final linear radiance (W × H).
         pub output,
     }
@@ -42,7 +45,8 @@ impl FrameImages<ImageDesc> {
     /// The images of a `width × height` frame with a shadow-map atlas of `atlas` texels
     /// (width, height); the vertex-radiance and splat targets only where `features` draw them,
     /// the splat sums per pixel, or per 2×2 sample where `splat_per_sample` (`frame::splat`); the
-    /// direct light's blocks where `direct_block` (pixels per side) is above 1 (`frame::direct`).
+    /// direct light's blocks where `direct_block` (pixels per side) is above 1 (`frame::direct`);
+    /// the values of `vertices` shared vertices where `features` interpolate smooth meshes.
     pub fn describe(
         width: u32,
         height: u32,
@@ -50,6 +54,7 @@ impl FrameImages<ImageDesc> {
         atlas: (u32, u32),
         splat_per_sample: bool,
         direct_block: u32,
+        vertices: usize,
     ) -> Self {
         let (sw, sh) = (width * SUPERSAMPLE, height * SUPERSAMPLE);
         let splat = match (features.splat, splat_per_sample) {
@@ -93,6 +98,12 @@ impl FrameImages<ImageDesc> {
             } else {
                 frame("direct light blocks (none)", 1, 1, RGBA32F)
             },
+            vertex_values: if features.vertex && vertices > 0 {
+                let (w, h) = super::vertex_values::extent(vertices);
+                frame("shared-vertex values", w, h, RGBA32F)
+            } else {
+                frame("shared-vertex values (none)", 1, 1, RGBA32F)
+            },
             output: frame("frame", width, height, RGBA32F),
         }
     }
@@ -121,5 +132,7 @@ resource_set! {
         pub shadow_views,
         /// Emitting triangles (emitter edges, `frame/edges.rs`).
         pub emitters,
+        /// Shared-vertex positions.
+        pub vertex_positions,
     }
 }
