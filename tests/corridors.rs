@@ -205,8 +205,8 @@ fn stack(walls: Walls) -> Scene {
 /// the measured pixels.
 fn direct_error(direct: &Image, one_bounce: &Image, measured: &[bool]) -> f64 {
     let (mut sq, mut sum, mut n) = (0.0, 0.0, 0usize);
-    for i in 0..measured.len() {
-        if measured[i] {
+    for (i, &m) in measured.iter().enumerate() {
+        if m {
             for c in 0..3 {
                 let (a, b) = (direct.pixels[i][c] as f64, one_bounce.pixels[i][c] as f64);
                 sq += (a - b).powi(2);

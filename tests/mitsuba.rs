@@ -422,7 +422,6 @@ fn measured_spectra_convert_as_mitsuba_converts_them() {
 }
 
 #[path = "common/mod.rs"]
-#[allow(dead_code)]
 mod common;
 
 #[test]

@@ -174,7 +174,7 @@ impl Surfaces {
                 }));
             } else {
                 s.mode.push(MODE_SPLAT);
-                if (slot as usize) < n {
+                if slot < n {
                     s.max_radius = s.max_radius.max(radius[li as usize]);
                 }
                 s.corner_vertex.push([u32::MAX; 3]);

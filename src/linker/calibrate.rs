@@ -150,8 +150,7 @@ fn sender_projected_solid_angle(
         if g == 0 {
             continue;
         }
-        for i in 0..3 {
-            let o = partners[k][i];
+        for (i, &o) in partners[k].iter().enumerate() {
             if o != u32::MAX && group[o as usize] == g {
                 continue;
             }

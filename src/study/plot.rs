@@ -184,6 +184,9 @@ fn tick(v: &f64) -> String {
 }
 
 type Panel<'a> = (&'a str, &'a dyn Fn(&Row) -> Option<f64>);
+/// A convergence panel: title, y label, the figure per row, and whether its antiradiance rows
+/// are only those of the `base` and `scheme` families (the baselines' always show).
+type ConvergencePanel<'a> = (&'a str, &'a str, &'a dyn Fn(&Row) -> Option<f64>, bool);
 
 /// How a method's curves are drawn: dash length and gap (0: solid), and the point marker.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -287,7 +290,7 @@ pub fn error_vs_time(rows: &[Row], path: &Path) -> Result<Crossover> {
     let mut full_cross = Crossover::NoOverlap;
     for (area, (title, f)) in areas.iter().zip(&panels) {
         let (x0, x1) = log_range(rows.iter().map(|r| r.total_ms() / 1e3));
-        let (y0, y1) = log_range(rows.iter().filter_map(|r| f(r)));
+        let (y0, y1) = log_range(rows.iter().filter_map(f));
         let mut chart = ChartBuilder::on(area)
             .caption(
                 format!("relative RMSE vs time, {title}"),
@@ -385,7 +388,7 @@ pub fn convergence(rows: &[Row], path: &Path) -> Result<()> {
         .max()
         .unwrap_or(1)
         .max(2) as f64;
-    let panels: [(&str, &str, &dyn Fn(&Row) -> Option<f64>, bool); 2] = [
+    let panels: [ConvergencePanel; 2] = [
         (
             "residual per iteration (scene settings, both schemes; baselines)",
             "change of I_ex (progressive refinement: unshot power), relative",

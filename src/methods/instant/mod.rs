@@ -329,7 +329,7 @@ fn follow(
     k: usize,
     out: &mut Vec<(DVec3, DVec3, DVec3)>,
 ) {
-    for bounce in 0..MAX_BOUNCES {
+    for (seq, order) in bounces.iter().take(MAX_BOUNCES) {
         let Some(hit) = caster.closest(origin, dir, eps, f64::INFINITY) else {
             return;
         };
@@ -346,7 +346,6 @@ fn follow(
             return;
         }
         out.push((p + n * lift, n, reflected));
-        let (seq, order) = &bounces[bounce];
         let [u1, u2, u3] = seq.point(order[k] as usize);
         let q = kd.max_element().min(1.0);
         if u3 >= q {

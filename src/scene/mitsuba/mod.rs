@@ -34,7 +34,7 @@ pub fn load_mitsuba_scene(path: &Path) -> Result<Scene> {
 
 /// Parses Mitsuba XML text as if it had been read from `path` (messages, relative paths).
 pub fn parse_mitsuba_scene(text: &str, path: &Path) -> Result<Scene> {
-    let doc = roxmltree::Document::parse(&text)
+    let doc = roxmltree::Document::parse(text)
         .map_err(|e| scene_err(path, format!("not well-formed XML: {e}")))?;
     let root = doc.root_element();
     if root.tag_name().name() != "scene" {
