@@ -29,7 +29,7 @@ import json, statistics as st, sys
 d, b, n, name = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
 rs = [json.load(open(f"{d}/r{b}-{i + 1}.json")) for i in range(n)]
 it = lambda r: sum(r["pass_ms"][k] for k in ["global", "local", "push", "pull"]) / r["iterations"]
-fr = lambda r: sum(r["pass_ms"].get(k, 0.0) for k in ["gbuffer", "splat", "direct_blocks", "compose"])
+fr = lambda r: sum(r["pass_ms"].get(k, 0.0) for k in ["vertex_values", "gbuffer", "splat", "direct_blocks", "compose"])
 m = lambda f: st.median(f(r) for r in rs)
 print(f"{name}: compose {m(lambda r: r['pass_ms']['compose']):.0f} ms, direct_blocks "
       f"{m(lambda r: r['pass_ms'].get('direct_blocks', 0.0)):.0f}, splat "

@@ -97,7 +97,7 @@ for scene in ("cornell-box", "mnroom"):
         r = json.load(open(path))
         p = r["pass_ms"]
         it = sum(p.get(k, 0.0) for k in ("global", "local", "push", "pull")) / max(r["iterations"], 1)
-        fr = sum(p.get(k, 0.0) for k in ("gbuffer", "splat", "direct_blocks", "compose"))
+        fr = sum(p.get(k, 0.0) for k in ("vertex_values", "gbuffer", "splat", "direct_blocks", "compose"))
         renders[scene] = {"pass_ms": p, "iterations": r["iterations"], "iteration_ms": it,
                           "frame_ms": fr, "frame_over_iteration": fr / it if it > 0 else None}
 smi = open(os.path.join(raw, "nvidia-smi.txt")).read().strip()

@@ -60,7 +60,7 @@ for scene in a.scenes:
         r = json.load(open(js))
         p = r["pass_ms"]
         f = (r.get("method_report") or {}).get("figures", {})
-        frame = sum(p.get(k, 0.0) for k in ("frame", "gbuffer", "splat", "direct_blocks", "compose", "interpolate"))
+        frame = sum(p.get(k, 0.0) for k in ("frame", "vertex_values", "gbuffer", "splat", "direct_blocks", "compose", "interpolate"))
         if "cube_bytes" in f:
             mem = f["cube_bytes"]
             build = f["hemicube_ms"] + f["warp_ms"] + f["trace_ms"]
