@@ -112,8 +112,8 @@ fn closed_uniform_box() {
         100.0 * worst
     );
     record("ibr.box.cube-rms", rms, 0.002);
-    // Measured 0.44% RMS, 1.76% worst (cube 128, hemicubes 128; 0.50% / 2.67% before the cells a
-    // wall cuts took the lights whose samples fell beside them).
+    // Measured 0.52% RMS, 2.13% worst (cube 128, hemicubes 128; 0.50% / 2.67% with the grid
+    // half a cell off the walls and copies only where a footprint covers a cell's centre).
     assert!(rms <= 0.0075, "{rms}");
     assert!(worst <= 0.04, "{worst}");
     let want = 2.0;
@@ -152,17 +152,17 @@ fn closed_uniform_box() {
             100.0 * flux,
             100.0 * ir_worst
         );
-        // Measured: the image's mean 0.63% from the flux's error (−0.51% and −1.14%; the
-        // direct light alone is −0.44%); 0.38% (−0.76%) before the cells a wall cuts took the
-        // lights whose samples fell beside them (`hemicube::splat_cells`).
+        // Measured: the image's mean 0.61% from the flux's error (−0.53% and −1.14%; the
+        // direct light alone is −0.44%); 0.38% (−0.76%) while the cells along the walls lost
+        // lights (`hemicube::splat_cells`, `Cube::new`).
         assert!(
             (mean - flux).abs() <= 0.01,
             "{backend}: {mean} against {flux}"
         );
         record(&format!("ibr.box.{backend}"), mean.abs(), 0.01);
         record(&format!("ibr.box.{backend}.worst"), worst, 0.01);
-        // Measured on both backends: mean −0.51%, worst 8.4% (−0.76% and 9.5% before the cells a
-        // wall cuts took the lights beside them; −1.29% before cut cells lit
+        // Measured on both backends: mean −0.53%, worst 8.3% (−0.76% and 9.5% while the cells
+        // along the walls lost lights; −1.29% before cut cells lit
         // their receivers; −2.62% and 15.8% with `--near-rays 0`, instant radiosity's 16.0%).
         assert!(mean.abs() <= 0.02, "{backend}: mean {mean}");
         assert!(worst <= 0.13, "{backend}: worst {worst}");

@@ -194,8 +194,9 @@ impl Cube {
     pub fn new(lo: DVec3, hi: DVec3, resolution: usize) -> Self {
         let ext = (hi - lo).max(DVec3::splat(1e-9));
         let cell = ext.max_element() / resolution.max(1) as f64;
-        // Half a cell of margin on every side: samples on the bounds' faces stay inside.
-        let lo = lo - DVec3::splat(0.5 * cell);
+        // The cells' edges on the bounds' faces (a room's walls bound whole cells, not slivers
+        // that a light's samples may miss), a hair of margin keeping samples on them inside.
+        let lo = lo - DVec3::splat(1e-4 * cell);
         let dims = [0, 1, 2].map(|a| ((ext[a] / cell).ceil() as usize + 1).max(1));
         let cells = |axis: usize| {
             let (b, c) = image_axes(axis);
