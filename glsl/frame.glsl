@@ -221,6 +221,28 @@ vec3 ar_irradiance_on(Light l, vec3 e, float cosv, vec3 p, vec3 n) {
     return e * cosv;
 }
 
+// shadow.rs pack_normal: octahedral coordinates, 11 bits each, as the integer u*2048 + v.
+float ar_pack_normal(vec3 n) {
+    n /= abs(n.x) + abs(n.y) + abs(n.z);
+    vec2 uv = n.xy;
+    if (n.z < 0.0) {
+        uv = (1.0 - abs(uv.yx)) * vec2(uv.x >= 0.0 ? 1.0 : -1.0, uv.y >= 0.0 ? 1.0 : -1.0);
+    }
+    vec2 q = clamp(floor((uv * 0.5 + 0.5) * 2047.0 + 0.5), 0.0, 2047.0);
+    return q.x * 2048.0 + q.y;
+}
+
+// shadow.rs unpack_normal.
+vec3 ar_unpack_normal(float packed) {
+    float qu = floor(packed / 2048.0);
+    vec2 uv = vec2(qu, packed - qu * 2048.0) / 2047.0 * 2.0 - 1.0;
+    vec3 n = vec3(uv, 1.0 - abs(uv.x) - abs(uv.y));
+    if (n.z < 0.0) {
+        n.xy = (1.0 - abs(uv.yx)) * vec2(uv.x >= 0.0 ? 1.0 : -1.0, uv.y >= 0.0 ? 1.0 : -1.0);
+    }
+    return normalize(n);
+}
+
 // shadow.rs ShadowMaps::visibility: tent-filtered percentage-closer lookup.
 float ar_visibility(Light l, vec3 p, vec3 n, float cosv) {
     // shadow.rs view_for: of a cube's faces, the one whose axis is nearest the direction.
@@ -270,9 +292,14 @@ float ar_visibility(Light l, vec3 p, vec3 n, float cosv) {
             vec3 ray = ortho ? v.forward.xyz : normalize(v.forward.xyz + side);
             float dn = dot(ray, n);
             float d = min(dn > -AR_SHADOW_GRAZING ? own : dot(p - o, n) / dn, own) - bias;
-            total += w;
-            if (w > 0.0 && d <= texelFetch(shadow_map, base + k, 0).r) {
+            vec2 t = texelFetch(shadow_map, base + k, 0).rg;
+            if (d <= t.x) {
                 lit += w;
+                total += w;
+            } else if (dot(ar_unpack_normal(t.y), p - (o + ray * t.x)) <= bias) {
+                // p behind the surface the tap sees: a shadow (in front of it: a crease's
+                // other face, no vote; shadow.rs visibility).
+                total += w;
             }
         }
     }

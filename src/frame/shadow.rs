@@ -3,7 +3,8 @@
 //! lights, wide spots, area-emitter samples). All views share one atlas image, each at its own
 //! size (emitter samples' maps are small, see [`crate::frame::emitters::SAMPLE_MAP_SIZE`]).
 //! A map stores the *linear* distance to the nearest surface at each texel center (from the light
-//! for perspective views, from the near plane for orthographic ones), so the GPU (rasterized,
+//! for perspective views, from the near plane for orthographic ones) and that surface's normal
+//! (turned to the light, packed in one float: [`pack_normal`]), so the GPU (rasterized,
 //! `glsl/shadow.frag`) and the CPU (ray cast at texel centers) build the same map, and one
 //! filtered lookup (`visibility`, mirrored in `glsl/frame.glsl`) serves leaves and pixels.
 
@@ -14,6 +15,44 @@ use rayon::prelude::*;
 
 /// Value of a texel that sees no surface.
 pub const EMPTY: f32 = 3.0e38;
+/// One texel of a map: the distance and the packed normal of the surface it sees (both
+/// [`EMPTY`] where it sees none; the GPU clears every channel to it).
+pub type Texel = [f32; 2];
+/// A texel that sees no surface.
+pub const EMPTY_TEXEL: Texel = [EMPTY, EMPTY];
+/// Steps per axis of a packed normal's octahedral coordinates (11 bits each: both fit a
+/// float's 24-bit mantissa exactly, so the GPU's float target stores them without rounding).
+const NORMAL_STEPS: f64 = 2047.0;
+
+/// `n` (unit) in one float: its octahedral coordinates, 11 bits each, as the integer
+/// `u·2048 + v` (mirrored in `glsl/frame.glsl` `ar_pack_normal`).
+pub fn pack_normal(n: DVec3) -> f32 {
+    let l1 = n.x.abs() + n.y.abs() + n.z.abs();
+    let (mut u, mut v) = (n.x / l1, n.y / l1);
+    if n.z < 0.0 {
+        let sign = |a: f64| if a >= 0.0 { 1.0 } else { -1.0 };
+        (u, v) = ((1.0 - v.abs()) * sign(u), (1.0 - u.abs()) * sign(v));
+    }
+    let q = |a: f64| ((a * 0.5 + 0.5) * NORMAL_STEPS).round().clamp(0.0, NORMAL_STEPS);
+    (q(u) * 2048.0 + q(v)) as f32
+}
+
+/// The unit normal [`pack_normal`] packed (mirrored in `glsl/frame.glsl`).
+pub fn unpack_normal(packed: f32) -> DVec3 {
+    let p = packed as f64;
+    let qu = (p / 2048.0).floor();
+    let (u, v) = (
+        qu / NORMAL_STEPS * 2.0 - 1.0,
+        (p - qu * 2048.0) / NORMAL_STEPS * 2.0 - 1.0,
+    );
+    let z = 1.0 - u.abs() - v.abs();
+    let (mut x, mut y) = (u, v);
+    if z < 0.0 {
+        let sign = |a: f64| if a >= 0.0 { 1.0 } else { -1.0 };
+        (x, y) = ((1.0 - v.abs()) * sign(u), (1.0 - u.abs()) * sign(v));
+    }
+    DVec3::new(x, y, z).normalize()
+}
 /// Depth bias, in texels at the receiver, along the light's ray. The lookup compares each tap
 /// with the receiver's own plane at that tap's texel (receiver-plane depth), so a planar
 /// receiver matches its own map to rounding at any slope and needs no slope-scaled bias; what
@@ -301,9 +340,9 @@ pub struct ShadowMaps {
     pub atlas: (u32, u32),
     /// Where each view's map starts in [`ShadowMaps::data`].
     pub offsets: Vec<usize>,
-    /// Distances, view after view, each row-major (`size × size` of its view); empty until
-    /// rendered.
-    pub data: Vec<f32>,
+    /// Texels (distance, packed normal), view after view, each row-major (`size × size` of its
+    /// view); empty until rendered.
+    pub data: Vec<Texel>,
 }
 
 impl ShadowMaps {
@@ -361,7 +400,7 @@ impl ShadowMaps {
 
     /// Fills [`ShadowMaps::data`] from the atlas image read back from the GPU (row-major,
     /// `atlas.0 × atlas.1`).
-    pub fn set_from_atlas(&mut self, atlas: &[f32]) {
+    pub fn set_from_atlas(&mut self, atlas: &[Texel]) {
         let w = self.atlas.0 as usize;
         let mut data = Vec::with_capacity(self.texels());
         for v in &self.views {
@@ -400,7 +439,7 @@ impl ShadowMaps {
             .enumerate()
             .flat_map(|(v, view)| (0..view.size).map(move |j| (v, j)))
             .collect();
-        let filled: Vec<Vec<f32>> = rows
+        let filled: Vec<Vec<Texel>> = rows
             .par_iter()
             .map(|&(v, j)| {
                 let view = &self.views[v];
@@ -409,7 +448,7 @@ impl ShadowMaps {
                         let (org, dir) = view.texel_ray(i, j, view.size);
                         // Behind a one-sided light by more than the lookup's filter reaches.
                         if view.front.is_some_and(|n| dir.dot(n) < -0.1) {
-                            return EMPTY;
+                            return EMPTY_TEXEL;
                         }
                         if let Some((old, moved)) = reuse {
                             if !moved.iter().any(|&m| meets(org, dir, m)) {
@@ -420,7 +459,13 @@ impl ShadowMaps {
                         cast.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                         caster
                             .closest(org, dir, 0.0, f64::INFINITY)
-                            .map_or(EMPTY, |h| view.distance(org + dir * h.t) as f32)
+                            .map_or(EMPTY_TEXEL, |h| {
+                                let c = caster.corners(h.shape);
+                                let n = (c[1] - c[0]).cross(c[2] - c[0]).normalize();
+                                // Turned to the light: a wall's two faces give one normal.
+                                let n = if n.dot(dir) > 0.0 { -n } else { n };
+                                [view.distance(org + dir * h.t) as f32, pack_normal(n)]
+                            })
                     })
                     .collect()
             })
@@ -448,7 +493,11 @@ impl ShadowMaps {
 
     /// Filtered fraction of light `light` reaching `p`, a surface point with unit (face)
     /// normal `n` facing the light (`_cos`, the cosine to the light, is no longer needed: the
-    /// receiver's plane gives each tap its own depth).
+    /// receiver's plane gives each tap its own depth). A tap nearer than the receiver's plane
+    /// votes shadow only if `p` lies behind the surface it sees: in a concave crease (a floor
+    /// meeting a lit wall) the taps past the crease see the other face, with `p` in front of
+    /// it; the plane beyond the crease is no receiver, so such a tap does not vote (before, it
+    /// darkened every crease by up to half its light within a texel of it at grazing light).
     pub fn visibility(&self, light: usize, p: DVec3, n: DVec3, _cos: f64) -> f64 {
         if self.data.is_empty() {
             return 1.0;
@@ -469,7 +518,7 @@ impl ShadowMaps {
         );
         let stored = |kx: i64, ky: i64| {
             let (i, j) = (kx.clamp(0, s - 1), ky.clamp(0, s - 1));
-            base[(j * s + i) as usize] as f64
+            base[(j * s + i) as usize][0] as f64
         };
         // Every tap's depth is at most the point's own less the bias: where no stored depth is
         // nearer than that, every tap is lit and the lookup is exactly 1. (The GPU evaluates
@@ -493,10 +542,18 @@ impl ShadowMaps {
                 // Never deeper than the point itself: on a mesh rougher than a texel the plane
                 // says little beyond the point, and deeper taps see the surface behind anyway.
                 let d = view.plane_distance(p, n, own, i as u32, j as u32).min(own) - bias;
-                total += w;
-                if d <= stored(kx, ky) {
+                let [depth, packed] = base[(j * s + i) as usize];
+                if d <= depth as f64 {
                     lit += w;
+                } else {
+                    // The surface the tap sees, and whether p lies in front of it.
+                    let (o, ray) = view.texel_ray(i as u32, j as u32, view.size);
+                    let seen = o + ray * depth as f64;
+                    if unpack_normal(packed).dot(p - seen) > bias {
+                        continue;
+                    }
                 }
+                total += w;
             }
         }
         if total > 0.0 {

@@ -452,8 +452,9 @@ impl GpuFrame {
     /// Reads the shadow-map atlas back (row-major; [`ShadowMaps::set_from_atlas`] takes it); the
     /// leaves' direct light is computed from it on the host, so leaves and pixels see the same
     /// maps.
-    pub fn read_shadow_maps(&mut self) -> Result<Vec<f32>> {
-        Ok(pack::decode_r32(&self.images.shadow_map.read()?))
+    pub fn read_shadow_maps(&mut self) -> Result<Vec<crate::frame::shadow::Texel>> {
+        let v = pack::decode_r32(&self.images.shadow_map.read()?);
+        Ok(v.chunks_exact(2).map(|t| [t[0], t[1]]).collect())
     }
 
     /// Records G-buffer, splat and compose passes reading `solver`'s I_total (bind it first

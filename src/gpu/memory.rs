@@ -154,6 +154,7 @@ pub fn texel_bytes(format: vk::Format) -> u64 {
     match format {
         vk::Format::R16G16B16A16_SFLOAT => 8,
         vk::Format::R32G32B32A32_SFLOAT | vk::Format::R32G32B32A32_UINT => 16,
+        vk::Format::R32G32_SFLOAT => 8,
         vk::Format::R32_SFLOAT | vk::Format::D32_SFLOAT | vk::Format::R32_UINT => 4,
         vk::Format::R16_SFLOAT => 2,
         vk::Format::B8G8R8A8_UNORM

@@ -1,5 +1,6 @@
 //! Shadow maps (§3.3): every element corner drawn once per light view, each view into its own
-//! square of one R32F atlas, keeping the nearest linear distance (depth-tested).
+//! square of one RG32F atlas, keeping the nearest linear distance and that surface's packed
+//! normal (depth-tested).
 
 use super::targets::FrameImages;
 use super::{begin_rendering_with_depth, end_rendering, frame_desc, FramePass, Load, Source};
@@ -56,7 +57,7 @@ fn pipeline(
     specialization: &[u32],
 ) -> Result<Owned<vk::Pipeline>> {
     let targets = [Target {
-        format: vk::Format::R32_SFLOAT,
+        format: vk::Format::R32G32_SFLOAT,
         additive: false,
         write: true,
     }];

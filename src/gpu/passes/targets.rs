@@ -73,7 +73,7 @@ impl FrameImages<ImageDesc> {
             ImageDesc::new(name, w, h, f, Purpose::ShadowMaps)
         };
         Self {
-            shadow_map: shadow("shadow maps", vk::Format::R32_SFLOAT),
+            shadow_map: shadow("shadow maps", vk::Format::R32G32_SFLOAT),
             shadow_depth: shadow("shadow depth", DEPTH_FORMAT),
             gbuf_position: frame("G-buffer position", sw, sh, RGBA32F),
             // Attachments are positional: the normal target (location 2) needs the vertex

@@ -62,7 +62,7 @@ pub struct GpuBackend {
     pending: Vec<(String, f64)>,
     /// After a follow that left every shadow view as it was: the maps' distances, reused
     /// instead of rendered and read back.
-    kept_maps: Option<Vec<f32>>,
+    kept_maps: Option<Vec<crate::frame::shadow::Texel>>,
     /// Where [`Solve::follow`] records the solver's uploads (an embedding host's command
     /// buffer, [`crate::engine::Engine::record_update`]); `None`: submitted at once.
     record_into: Option<vk::CommandBuffer>,
