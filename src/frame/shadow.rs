@@ -33,7 +33,11 @@ pub fn pack_normal(n: DVec3) -> f32 {
         let sign = |a: f64| if a >= 0.0 { 1.0 } else { -1.0 };
         (u, v) = ((1.0 - v.abs()) * sign(u), (1.0 - u.abs()) * sign(v));
     }
-    let q = |a: f64| ((a * 0.5 + 0.5) * NORMAL_STEPS).round().clamp(0.0, NORMAL_STEPS);
+    let q = |a: f64| {
+        ((a * 0.5 + 0.5) * NORMAL_STEPS)
+            .round()
+            .clamp(0.0, NORMAL_STEPS)
+    };
     (q(u) * 2048.0 + q(v)) as f32
 }
 

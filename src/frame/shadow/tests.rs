@@ -144,7 +144,14 @@ fn packed_normals_keep_their_direction() {
     let mut worst = 0.0f64;
     for k in 0..20000 {
         let n = match k {
-            0..6 => [DVec3::X, DVec3::NEG_X, DVec3::Y, DVec3::NEG_Y, DVec3::Z, DVec3::NEG_Z][k],
+            0..6 => [
+                DVec3::X,
+                DVec3::NEG_X,
+                DVec3::Y,
+                DVec3::NEG_Y,
+                DVec3::Z,
+                DVec3::NEG_Z,
+            ][k],
             _ => DVec3::new(uniform(), uniform(), uniform()),
         };
         if n.length() < 1e-3 {
@@ -153,7 +160,10 @@ fn packed_normals_keep_their_direction() {
         let n = n.normalize();
         let packed = pack_normal(n);
         // An integer below 2^22: a float holds it exactly.
-        assert!(packed.fract() == 0.0 && packed < (1 << 22) as f32, "{packed}");
+        assert!(
+            packed.fract() == 0.0 && packed < (1 << 22) as f32,
+            "{packed}"
+        );
         worst = worst.max(unpack_normal(packed).dot(n).clamp(-1.0, 1.0).acos());
     }
     // 11 bits per octahedral coordinate, steps of 1/1023: measured 2.04e-3 rad (0.12°) at worst.
@@ -171,9 +181,24 @@ fn a_lit_crease_stays_lit_and_a_contact_stays_dark() {
     let m = scene.add_material(crate::scene::Material::diffuse("w", 0.5));
     let p = DVec3::new;
     let quads = [
-        [p(-1.0, 0.0, -1.0), p(-1.0, 0.0, 1.0), p(1.5, 0.0, 1.0), p(1.5, 0.0, -1.0)],
-        [p(-1.0, 0.0, -1.0), p(-1.0, 1.0, -1.0), p(-1.0, 1.0, 1.0), p(-1.0, 0.0, 1.0)],
-        [p(0.8, 0.0, -1.0), p(0.8, 0.5, -1.0), p(0.8, 0.5, 1.0), p(0.8, 0.0, 1.0)],
+        [
+            p(-1.0, 0.0, -1.0),
+            p(-1.0, 0.0, 1.0),
+            p(1.5, 0.0, 1.0),
+            p(1.5, 0.0, -1.0),
+        ],
+        [
+            p(-1.0, 0.0, -1.0),
+            p(-1.0, 1.0, -1.0),
+            p(-1.0, 1.0, 1.0),
+            p(-1.0, 0.0, 1.0),
+        ],
+        [
+            p(0.8, 0.0, -1.0),
+            p(0.8, 0.5, -1.0),
+            p(0.8, 0.5, 1.0),
+            p(0.8, 0.0, 1.0),
+        ],
     ];
     let mut triangles = Vec::new();
     for (k, q) in quads.iter().enumerate() {
