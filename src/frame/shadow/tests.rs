@@ -2,6 +2,17 @@
 
 use super::*;
 
+/// Uniform numbers in [−1, 1) from a linear congruential generator seeded with `seed`.
+fn uniform_from(seed: u64) -> impl FnMut() -> f64 {
+    let mut rng = seed;
+    move || {
+        rng = rng
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (rng >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    }
+}
+
 /// A sphere is seen where it stands in front of a view, not behind it or far to its side;
 /// one around the light always is. Orthographic views take the square widened by the radius.
 #[test]
@@ -111,13 +122,7 @@ fn texel_rays_project_to_their_texels() {
         (c.x / c.w).abs() <= 1.0 + 1e-12 && (c.y / c.w).abs() <= 1.0 + 1e-12 && c.w > 0.0
     };
     assert!(covers(f, maps.views[1].origin + d));
-    let mut rng = 1u64;
-    let mut uniform = || {
-        rng = rng
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (rng >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-    };
+    let mut uniform = uniform_from(1);
     let origin = maps.views[7].origin;
     for _ in 0..1000 {
         let d = DVec3::new(uniform(), uniform(), uniform());
@@ -134,24 +139,11 @@ fn texel_rays_project_to_their_texels() {
 
 #[test]
 fn packed_normals_keep_their_direction() {
-    let mut rng = 7u64;
-    let mut uniform = || {
-        rng = rng
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (rng >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-    };
+    let mut uniform = uniform_from(7);
     let mut worst = 0.0f64;
     for k in 0..20000 {
         let n = match k {
-            0..6 => [
-                DVec3::X,
-                DVec3::NEG_X,
-                DVec3::Y,
-                DVec3::NEG_Y,
-                DVec3::Z,
-                DVec3::NEG_Z,
-            ][k],
+            0..6 => CUBE[k],
             _ => DVec3::new(uniform(), uniform(), uniform()),
         };
         if n.length() < 1e-3 {
