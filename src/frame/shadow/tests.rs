@@ -141,11 +141,8 @@ fn texel_rays_project_to_their_texels() {
 fn packed_normals_keep_their_direction() {
     let mut uniform = uniform_from(7);
     let mut worst = 0.0f64;
-    for k in 0..20000 {
-        let n = match k {
-            0..6 => CUBE[k],
-            _ => DVec3::new(uniform(), uniform(), uniform()),
-        };
+    let random = std::iter::repeat_with(|| DVec3::new(uniform(), uniform(), uniform()));
+    for n in CUBE.into_iter().chain(random.take(20000 - CUBE.len())) {
         if n.length() < 1e-3 {
             continue;
         }
