@@ -162,8 +162,9 @@ fn closed_uniform_box() {
         );
         record(&format!("ibr.box.{backend}"), mean.abs(), 0.01);
         record(&format!("ibr.box.{backend}.worst"), worst, 0.01);
-        // Measured on both backends: mean −0.51%, worst +8.7% (too bright, in the corner by
-        // the camera's bottom right; −0.53% and 8.3% while shadow taps past a concave corner
+        // Measured on both backends: mean −0.51%, worst +8.7% (too bright, where the floor
+        // meets the right wall; the VPLs' sampling: it moves with the number of light paths,
+        // docs/measurements.md; −0.53% and 8.3% while shadow taps past a concave corner
         // voted shadow and darkened the creases; −0.76% and 9.5% while the cells
         // along the walls lost lights; −1.29% before cut cells lit
         // their receivers; −2.62% and 15.8% with `--near-rays 0`, instant radiosity's 16.0%).
