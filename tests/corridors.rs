@@ -526,16 +526,12 @@ fn direct_light_against_a_converged_reference() {
         let (w, h) = (scene.camera.width, scene.camera.height);
         let all = vec![true; (w * h) as usize];
         let inside = one_surface(&scene, w, h);
-        let o = Options {
-            supersample: Some(4),
-            passes: Some(4),
-            solver: SolverOverrides {
-                iterations: Some(0),
-                ..Default::default()
-            },
-            ..Options::backend(Backend::Cpu)
-        };
-        let d = render_checked(&key, &scene, o).image;
+        let d = render_checked(
+            &key,
+            &scene,
+            direct_only(4, 4, antiradiance::frame::emitters::SAMPLE_MAP_SIZE),
+        )
+        .image;
         let (e, ei) = (
             direct_error(&d, &fine.direct, &all),
             direct_error(&d, &fine.direct, &inside),
@@ -546,17 +542,7 @@ fn direct_light_against_a_converged_reference() {
         let worst = if lit == Lit::Sun { &mut sun } else { &mut lamp };
         *worst = (worst.0.max(e), worst.1.max(ei));
         if lit == Lit::Emitter {
-            let mut o = Options {
-                supersample: Some(8),
-                passes: Some(16),
-                solver: SolverOverrides {
-                    iterations: Some(0),
-                    ..Default::default()
-                },
-                ..Options::backend(Backend::Cpu)
-            };
-            o.emitter_map_size = 256;
-            let d = render_checked(&key, &scene, o).image;
+            let d = render_checked(&key, &scene, direct_only(8, 16, 256)).image;
             let (e, noise) = (direct_error(&d, &fine.direct, &all), noise(&fine));
             println!(
                 "{key}: at 8x in 16 passes, 256² maps {e:.4}; the reference's own noise {noise:.4}"
@@ -591,6 +577,22 @@ fn direct_light_against_a_converged_reference() {
         fine_lamp < 0.03,
         "direct light from the lamp at 8x in 16 passes {fine_lamp:.4}"
     );
+}
+
+/// The CPU frame's emission and direct light alone (`--iterations 0`) at `supersample`× in
+/// `passes` passes, the emitter samples' maps `map`².
+fn direct_only(supersample: u32, passes: u32, map: u32) -> Options {
+    let mut o = Options {
+        supersample: Some(supersample),
+        passes: Some(passes),
+        solver: SolverOverrides {
+            iterations: Some(0),
+            ..Default::default()
+        },
+        ..Options::backend(Backend::Cpu)
+    };
+    o.emitter_map_size = map;
+    o
 }
 
 /// A path-traced image's own noise as a relative RMSE: the root mean square of its pixels'
